@@ -1,0 +1,53 @@
+"""Raw device events: append-only, exactly as received, keyed by (device, event_id)."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import JSON, BigInteger, ForeignKey, Integer, String, Text, UniqueConstraint
+from sqlalchemy.orm import Mapped, mapped_column
+
+from service.database import Base, UTCDateTime, utcnow
+
+BigId = BigInteger().with_variant(Integer, "sqlite")
+
+
+class RawEvent(Base):
+    __tablename__ = "raw_events"
+    __table_args__ = (UniqueConstraint("device_id", "event_id"),)
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    device_id: Mapped[str] = mapped_column(ForeignKey("devices.id"), index=True)
+    event_id: Mapped[str] = mapped_column(String(64))
+    kind: Mapped[str] = mapped_column(String(32), index=True)
+    occurred_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    received_at: Mapped[datetime] = mapped_column(UTCDateTime(), default=utcnow)
+    section: Mapped[str | None] = mapped_column(String(32), nullable=True)
+    body: Mapped[dict[str, Any]] = mapped_column(JSON)
+    body_sha256: Mapped[str] = mapped_column(String(64))
+    # What the client was told; written in the same transaction as the row, never changed after.
+    result: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
+    derive_error: Mapped[str | None] = mapped_column(Text, nullable=True)
+
+
+class Snapshot(Base):
+    """A tail-car image and its detection; derived from a ``tail_snapshot`` raw event (same id)."""
+
+    __tablename__ = "snapshots"
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=False)
+    device_id: Mapped[str] = mapped_column(ForeignKey("devices.id"))
+    station: Mapped[str] = mapped_column(String(32))
+    section: Mapped[str] = mapped_column(String(32), index=True)
+    occurred_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    sha256: Mapped[str] = mapped_column(String(64))
+    content_type: Mapped[str] = mapped_column(String(32))
+    width: Mapped[int] = mapped_column(Integer)
+    height: Mapped[int] = mapped_column(Integer)
+    size_bytes: Mapped[int] = mapped_column(Integer)
+    verdict: Mapped[str | None] = mapped_column(String(16), nullable=True)
+    score: Mapped[float | None] = mapped_column(nullable=True)
+    detection: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
+    run_id: Mapped[int | None] = mapped_column(BigId, nullable=True, index=True)
+    side: Mapped[str | None] = mapped_column(String(16), nullable=True)

@@ -1,0 +1,156 @@
+"""Device protocol endpoints: ``POST /events`` (single or batch) and ``POST /snapshots``."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from fastapi import APIRouter, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import JSONResponse
+from pydantic import ValidationError
+from starlette.datastructures import UploadFile
+
+from ingest import service
+from ingest.schemas import EventBatch
+from ingest.snapshots import check_image, store_image
+from service.auth import CurrentDevicePrincipal
+from service.database import DbSession
+from service.errors import (
+    PayloadTooLarge,
+    Unprocessable,
+    UnsupportedMediaType,
+    validation_errors,
+)
+from service.settings import get_settings
+
+router = APIRouter(tags=["devices"])
+
+EVENT_BODY_DOC = {
+    "requestBody": {
+        "required": True,
+        "content": {
+            "application/json": {
+                "schema": {
+                    "oneOf": [
+                        {"$ref": "#/components/schemas/DeviceEvent"},
+                        {"$ref": "#/components/schemas/EventBatch"},
+                    ]
+                }
+            }
+        },
+    }
+}
+
+
+async def _read_limited(request: Request, limit: int) -> bytes:
+    declared = request.headers.get("content-length")
+    if declared is not None and declared.isdigit() and int(declared) > limit:
+        raise PayloadTooLarge(f"the body has {declared} bytes; the limit is {limit}")
+    chunks: list[bytes] = []
+    size = 0
+    async for chunk in request.stream():
+        size += len(chunk)
+        if size > limit:
+            raise PayloadTooLarge(f"the body exceeds the limit of {limit} bytes")
+        chunks.append(chunk)
+    return b"".join(chunks)
+
+
+def _json(data: bytes) -> Any:
+    try:
+        return json.loads(data)
+    except RecursionError:
+        raise Unprocessable("the JSON is nested too deeply") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise Unprocessable(
+            f"the body is not valid JSON ({exc})", errors=[{"loc": ["body"], "msg": "invalid JSON"}]
+        ) from None
+
+
+@router.post(
+    "/events",
+    openapi_extra=EVENT_BODY_DOC,
+    responses={
+        201: {"description": "a new event, stored and committed"},
+        200: {"description": "a retry of a stored event (original result), or batch results"},
+        409: {"description": "event_id reused with a different body"},
+        422: {"description": "invalid event"},
+    },
+)
+async def post_events(
+    request: Request, session: DbSession, principal: CurrentDevicePrincipal
+) -> JSONResponse:
+    """Accept one event, or ``{"events": [...]}`` with at most 1000 events (each stands alone)."""
+    settings = get_settings()
+    content_type = request.headers.get("content-type", "")
+    if not content_type.split(";")[0].strip().lower().endswith("json"):
+        raise UnsupportedMediaType("send events as application/json")
+    payload = _json(await _read_limited(request, settings.max_body_bytes))
+    device = principal.device
+    assert device is not None
+    if isinstance(payload, dict) and "events" in payload and "kind" not in payload:
+        try:
+            batch = EventBatch.model_validate(payload)
+        except ValidationError as exc:
+            raise Unprocessable(
+                'invalid batch: send {"events": [...]} with 1 to 1000 events',
+                errors=[
+                    {**e, "loc": ["body", *e["loc"]]} for e in validation_errors(list(exc.errors()))
+                ],
+            ) from None
+        results = await run_in_threadpool(service.accept_batch, session, device, batch.events)
+        return JSONResponse({"results": results}, status_code=200)
+    status, result = await run_in_threadpool(service.accept_event, session, device, payload)
+    return JSONResponse(result, status_code=status)
+
+
+@router.post(
+    "/snapshots",
+    responses={201: {"description": "stored"}, 200: {"description": "retry"}, 413: {}, 422: {}},
+)
+async def post_snapshot(
+    request: Request, session: DbSession, principal: CurrentDevicePrincipal
+) -> JSONResponse:
+    """Multipart upload of a tail-car image with ``event_id``, ``occurred_at`` and ``section``."""
+    settings = get_settings()
+    if not request.headers.get("content-type", "").startswith("multipart/form-data"):
+        raise UnsupportedMediaType("send snapshots as multipart/form-data with an 'image' file")
+    declared = request.headers.get("content-length", "")
+    if declared.isdigit() and int(declared) > settings.max_image_bytes + 64 * 1024:
+        raise PayloadTooLarge(
+            f"the upload has {declared} bytes; the image limit is {settings.max_image_bytes}"
+        )
+    async with request.form(max_files=1, max_fields=10) as form:
+        upload = form.get("image")
+        if not isinstance(upload, UploadFile):
+            raise Unprocessable(
+                "the 'image' file is missing",
+                errors=[{"loc": ["body", "image"], "msg": "field required"}],
+            )
+        data = await upload.read(settings.max_image_bytes + 1)
+        fields = {k: form.get(k) for k in ("event_id", "occurred_at", "section")}
+    missing = [k for k, v in fields.items() if not isinstance(v, str) or not v]
+    if missing:
+        raise Unprocessable(
+            f"missing form fields: {', '.join(missing)}",
+            errors=[{"loc": ["body", k], "msg": "field required"} for k in missing],
+        )
+    checked = await run_in_threadpool(
+        check_image, data, max_bytes=settings.max_image_bytes, max_pixels=settings.max_image_pixels
+    )
+    payload = {
+        "kind": "tail_snapshot",
+        **fields,
+        "image_sha256": checked.sha256,
+        "content_type": checked.content_type,
+        "width": checked.width,
+        "height": checked.height,
+        "size_bytes": len(data),
+    }
+    device = principal.device
+    assert device is not None
+    # The file goes to disk first: a stored event never points at a missing image.
+    await run_in_threadpool(store_image, settings.image_dir, checked, data)
+    status, result = await run_in_threadpool(service.accept_snapshot, session, device, payload)
+    return JSONResponse(result, status_code=status)

@@ -1,0 +1,187 @@
+"""Device event schemas of protocol v1: one pydantic model per kind, discriminated by ``kind``."""
+
+from __future__ import annotations
+
+import math
+from datetime import datetime
+from typing import Annotated, Any, Literal
+
+from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, TypeAdapter, field_validator
+
+EventId = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[\x21-\x7e]+$")]
+SectionId = Annotated[str, Field(min_length=1, max_length=32)]
+TrainNumber = Annotated[str, Field(min_length=1, max_length=32)]
+CarId = Annotated[str, Field(min_length=1, max_length=32)]
+Microseconds = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+
+
+class EventBase(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    event_id: EventId
+    occurred_at: AwareDatetime
+
+
+class SectionEvent(EventBase):
+    section: SectionId
+
+
+class TrainDeparted(SectionEvent):
+    kind: Literal["train_departed"]
+    train: TrainNumber
+
+
+class TrainArrived(SectionEvent):
+    kind: Literal["train_arrived"]
+    train: TrainNumber
+
+
+class AxleCount(SectionEvent):
+    kind: Literal["axle_count"]
+    axles: Annotated[int, Field(ge=0, le=10_000)]
+
+
+class IrId(SectionEvent):
+    kind: Literal["ir_id"]
+    reads: Annotated[list[Annotated[int, Field(ge=0, le=2**32)]], Field(max_length=10_000)]
+
+
+class IrPulses(SectionEvent):
+    kind: Literal["ir_pulses"]
+    query_period_us: Annotated[float, Field(gt=0, le=1e7, allow_inf_nan=False)]
+    reflection_window_us: Annotated[float, Field(ge=0, le=1e7, allow_inf_nan=False)]
+    reply_times_us: Annotated[list[Microseconds], Field(max_length=100_000)]
+    query_times_us: Annotated[list[Microseconds], Field(max_length=100_000)] | None = None
+
+
+class IrManchester(SectionEvent):
+    kind: Literal["ir_manchester"]
+    samples_per_bit: Annotated[int, Field(ge=2, le=1024)]
+    samples: Annotated[list[Literal[0, 1]], Field(max_length=1_000_000)]
+
+
+class WheelMarks(SectionEvent):
+    kind: Literal["wheel_marks"]
+    direction: Literal[1, 2]
+    baseline: Annotated[list[int], Field(min_length=5, max_length=10_000)]
+    axles: Annotated[
+        list[Annotated[list[int], Field(min_length=1, max_length=256)]],
+        Field(min_length=1, max_length=32),
+    ]
+
+
+class WheelMarksWritten(EventBase):
+    kind: Literal["wheel_marks_written"]
+    car: CarId
+    code: Annotated[int, Field(ge=0, le=2**32)]
+    detections: Annotated[list[Literal["W1", "W2"]], Field(max_length=1000)]
+
+
+class Measurement(EventBase):
+    kind: Literal["measurement"]
+    car: CarId
+    values: Annotated[
+        dict[Annotated[str, Field(min_length=1, max_length=64)], float],
+        Field(min_length=1, max_length=200),
+    ]
+
+    @field_validator("values")
+    @classmethod
+    def _finite(cls, values: dict[str, float]) -> dict[str, float]:
+        bad = [k for k, v in values.items() if not math.isfinite(v)]
+        if bad:
+            raise ValueError(f"values must be finite numbers: {', '.join(bad)}")
+        return values
+
+
+class MotionSample(EventBase):
+    kind: Literal["motion_sample"]
+    train: TrainNumber
+    t: Annotated[float, Field(allow_inf_nan=False)]
+    accel_mps2: Annotated[float, Field(ge=-50, le=50, allow_inf_nan=False)]
+    gnss_speed_mps: Annotated[float, Field(ge=0, le=200, allow_inf_nan=False)] | None = None
+    gnss_delay_s: Annotated[float, Field(ge=0, le=600, allow_inf_nan=False)] | None = None
+    marker_id: Annotated[str, Field(min_length=1, max_length=64)] | None = None
+
+
+class Heartbeat(EventBase):
+    kind: Literal["heartbeat"]
+
+
+DeviceEvent = Annotated[
+    TrainDeparted
+    | TrainArrived
+    | AxleCount
+    | IrId
+    | IrPulses
+    | IrManchester
+    | WheelMarks
+    | WheelMarksWritten
+    | Measurement
+    | MotionSample
+    | Heartbeat,
+    Field(discriminator="kind"),
+]
+EVENT_ADAPTER: TypeAdapter[Any] = TypeAdapter(DeviceEvent)
+EVENT_KINDS = (
+    "train_departed",
+    "train_arrived",
+    "axle_count",
+    "ir_id",
+    "ir_pulses",
+    "ir_manchester",
+    "wheel_marks",
+    "wheel_marks_written",
+    "measurement",
+    "motion_sample",
+    "heartbeat",
+)
+
+# Which event kinds each device kind may send (a device posting another kind gets 403).
+ALLOWED_KINDS: dict[str, frozenset[str]] = {
+    "interlocking": frozenset({"train_departed", "train_arrived", "heartbeat"}),
+    "camera": frozenset({"heartbeat", "tail_snapshot"}),
+    "wheel_mark_reader": frozenset({"wheel_marks", "heartbeat"}),
+    "ir_reader": frozenset({"ir_id", "ir_pulses", "ir_manchester", "heartbeat"}),
+    "axle_counter": frozenset({"axle_count", "heartbeat"}),
+    "marking_station": frozenset({"wheel_marks_written", "heartbeat"}),
+    "test_bench": frozenset({"measurement", "heartbeat"}),
+    "onboard_unit": frozenset({"motion_sample", "measurement", "heartbeat"}),
+}
+
+
+class TailSnapshot(SectionEvent):
+    """The event stored for a ``POST /snapshots`` upload (the image itself is a file)."""
+
+    kind: Literal["tail_snapshot"]
+    image_sha256: Annotated[str, Field(pattern=r"^[0-9a-f]{64}$")]
+    content_type: Literal["image/jpeg", "image/png"]
+    width: int
+    height: int
+    size_bytes: int
+
+
+class EventBatch(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    events: Annotated[list[dict[str, Any]], Field(min_length=1, max_length=1000)]
+
+
+class EventAck(BaseModel):
+    event_id: str
+    status: Literal["created", "duplicate"]
+    model_config = ConfigDict(extra="allow")
+
+
+class BatchItemResult(BaseModel):
+    event_id: str | None
+    status: Literal["created", "duplicate", "rejected"]
+    error: dict[str, Any] | None = None
+    result: dict[str, Any] | None = None
+
+
+class BatchResult(BaseModel):
+    results: list[BatchItemResult]
+
+
+def event_time(event: EventBase) -> datetime:
+    return event.occurred_at

@@ -1,0 +1,198 @@
+"""Idempotent storage of device events: validate, store raw, derive, report."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+from typing import Any
+
+from pydantic import ValidationError
+from sqlalchemy import select
+from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.orm import Session
+
+from ingest.handlers import Derivation, derive
+from ingest.models import RawEvent
+from ingest.schemas import ALLOWED_KINDS, EVENT_ADAPTER, EVENT_KINDS, TailSnapshot
+from service.errors import Conflict, Forbidden, Unprocessable, validation_errors
+from service.setup.models import Device, Section
+
+log = logging.getLogger("depot.ingest")
+
+
+def canonical_sha256(body: dict[str, Any]) -> str:
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=False, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def parse_event(payload: Any) -> Any:
+    """Validate one event against the schema of its kind; 422 names the offending fields."""
+    if not isinstance(payload, dict):
+        raise Unprocessable(
+            "an event must be a JSON object", errors=[{"loc": ["body"], "msg": "not an object"}]
+        )
+    kind = payload.get("kind")
+    if kind not in EVENT_KINDS:
+        raise Unprocessable(
+            f"unknown event kind {kind!r}; expected one of {', '.join(EVENT_KINDS)}",
+            errors=[{"loc": ["body", "kind"], "msg": "unknown event kind"}],
+        )
+    try:
+        return EVENT_ADAPTER.validate_python(payload)
+    except ValidationError as exc:
+        errors = validation_errors(list(exc.errors()))
+        for error in errors:
+            # The discriminator adds the kind as the first location step; the field is what matters.
+            if len(error["loc"]) > 1 and error["loc"][0] == kind:
+                error["loc"] = error["loc"][1:]
+            error["loc"] = ["body", *error["loc"]]
+        fields = ", ".join(".".join(e["loc"][1:]) for e in errors[:5])
+        raise Unprocessable(f"invalid {kind} event: {fields}", errors=errors) from None
+
+
+def check_device_may_send(device: Device, kind: str) -> None:
+    if kind not in ALLOWED_KINDS.get(device.kind, frozenset()):
+        raise Forbidden(f"a {device.kind} device may not send {kind} events")
+
+
+def check_section(session: Session, device: Device, section_id: str | None) -> None:
+    """The protocol's rule: a device's own section, or one starting/ending at its station."""
+    if section_id is None:
+        return
+    loc = {"loc": ["body", "section"], "msg": "section not served by this device"}
+    if device.section is not None:
+        if section_id != device.section:
+            raise Unprocessable(
+                f"device {device.id} serves section {device.section}, not {section_id!r}",
+                errors=[loc],
+            )
+        return
+    section = session.get(Section, section_id)
+    if section is None or device.station not in (section.from_station, section.to_station):
+        raise Unprocessable(
+            f"section {section_id!r} does not start or end at station {device.station}",
+            errors=[loc],
+        )
+
+
+def _insert_raw(session: Session, values: dict[str, Any]) -> int | None:
+    """Insert unless (device, event_id) exists; returns the new id, or None for a duplicate."""
+    dialect = session.get_bind().dialect.name
+    module = postgresql if dialect == "postgresql" else sqlite
+    statement = (
+        module.insert(RawEvent)
+        .values(**values)
+        .on_conflict_do_nothing(index_elements=["device_id", "event_id"])
+        .returning(RawEvent.id)
+    )
+    return session.execute(statement).scalar_one_or_none()
+
+
+def store_event(
+    session: Session, device: Device, event: Any, body: dict[str, Any]
+) -> tuple[int, dict[str, Any]]:
+    """Store one validated event idempotently; returns (HTTP status, result body).
+
+    201 for a new event (derived results included), 200 with the original result for a retry
+    with the same body, 409 (raised) for the same ``event_id`` with a different body.
+    """
+    digest = canonical_sha256(body)
+    raw_id = _insert_raw(
+        session,
+        {
+            "device_id": device.id,
+            "event_id": event.event_id,
+            "kind": event.kind,
+            "occurred_at": event.occurred_at,
+            "section": getattr(event, "section", None),
+            "body": body,
+            "body_sha256": digest,
+            "result": {},
+        },
+    )
+    if raw_id is None:
+        existing = session.scalar(
+            select(RawEvent).where(
+                RawEvent.device_id == device.id, RawEvent.event_id == event.event_id
+            )
+        )
+        assert existing is not None  # the conflict proves the row exists and is committed
+        if existing.body_sha256 != digest:
+            raise Conflict(
+                f"event_id {event.event_id!r} was already used by {device.id} for a different event"
+            )
+        return 200, existing.result
+    raw = session.get_one(RawEvent, raw_id)
+    raw.result = {
+        "event_id": event.event_id,
+        "status": "created",
+        **run_derivation(session, raw, event, device),
+    }
+    session.flush()
+    return 201, raw.result
+
+
+def run_derivation(
+    session: Session, raw: RawEvent, event: Any, device: Device, *, replaying: bool = False
+) -> dict[str, Any]:
+    """Derive state from a stored event; a failing derivation never loses the raw event."""
+    try:
+        with session.begin_nested():
+            return derive(Derivation(session, raw, event, device, replaying))
+    except Exception as exc:  # noqa: BLE001 - the raw event is kept; the fault is recorded
+        log.exception("deriving from %s/%s failed", device.id, raw.event_id)
+        raw.derive_error = f"{type(exc).__name__}: {exc}"
+        return {"derive_error": raw.derive_error}
+
+
+def accept_event(session: Session, device: Device, payload: Any) -> tuple[int, dict[str, Any]]:
+    event = parse_event(payload)
+    check_device_may_send(device, event.kind)
+    check_section(session, device, getattr(event, "section", None))
+    # Stored exactly as received; the canonical hash makes key order irrelevant for retries.
+    return store_event(session, device, event, payload)
+
+
+def accept_batch(session: Session, device: Device, items: list[Any]) -> list[dict[str, Any]]:
+    """Each item stands alone: a rejected item leaves the others stored."""
+    results: list[dict[str, Any]] = []
+    for item in items:
+        event_id = item.get("event_id") if isinstance(item, dict) else None
+        try:
+            with session.begin_nested():
+                status, result = accept_event(session, device, item)
+            results.append(
+                {
+                    "event_id": event_id,
+                    "status": "created" if status == 201 else "duplicate",
+                    "result": result,
+                }
+            )
+        except (Unprocessable, Conflict, Forbidden) as exc:
+            error = {"status": exc.status, "title": exc.title, "detail": exc.detail}
+            if exc.errors:
+                error["errors"] = exc.errors
+            results.append(
+                {
+                    "event_id": event_id if isinstance(event_id, str) else None,
+                    "status": "rejected",
+                    "error": error,
+                }
+            )
+    return results
+
+
+def accept_snapshot(
+    session: Session, device: Device, payload: dict[str, Any]
+) -> tuple[int, dict[str, Any]]:
+    """Store the event of an uploaded (already checked and written) tail-car image."""
+    try:
+        event = TailSnapshot.model_validate(payload)
+    except ValidationError as exc:
+        errors = [{**e, "loc": ["body", *e["loc"]]} for e in validation_errors(list(exc.errors()))]
+        fields = ", ".join(".".join(e["loc"][1:]) for e in errors[:5])
+        raise Unprocessable(f"invalid snapshot: {fields}", errors=errors) from None
+    check_device_may_send(device, event.kind)
+    check_section(session, device, event.section)
+    return store_event(session, device, event, payload)

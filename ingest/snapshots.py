@@ -1,0 +1,99 @@
+"""Tail-car snapshot files: validation without trusting the header, content-addressed storage."""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import os
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from PIL import Image, UnidentifiedImageError
+
+from service.errors import PayloadTooLarge, Unprocessable
+
+FORMATS = {"JPEG": ("image/jpeg", ".jpg"), "PNG": ("image/png", ".png")}
+
+
+@dataclass(frozen=True)
+class CheckedImage:
+    sha256: str
+    content_type: str
+    suffix: str
+    width: int
+    height: int
+
+
+def _field_error(msg: str) -> list[dict[str, object]]:
+    return [{"loc": ["body", "image"], "msg": msg}]
+
+
+def check_image(data: bytes, *, max_bytes: int, max_pixels: int) -> CheckedImage:
+    """Check an uploaded image before anything is stored.
+
+    The pixel count is read from the header first, so a decompression bomb is refused without
+    the image ever being allocated; then the whole file is decoded to catch truncation.
+    """
+    if not data:
+        raise Unprocessable("the image file is empty", errors=_field_error("empty file"))
+    if len(data) > max_bytes:
+        raise PayloadTooLarge(f"the image has {len(data)} bytes; the limit is {max_bytes}")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            image = Image.open(io.BytesIO(data))
+            kind = FORMATS.get(image.format or "")
+            if kind is None:
+                raise Unprocessable(
+                    f"the file is {image.format or 'not an image'}; send a JPEG or PNG",
+                    errors=_field_error("not JPEG or PNG"),
+                )
+            width, height = image.size
+            if width * height > max_pixels:
+                raise PayloadTooLarge(
+                    f"the image is {width}×{height} pixels; the limit is {max_pixels} pixels"
+                )
+            image.load()
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning):
+        raise PayloadTooLarge(
+            f"the image header declares more than {max_pixels} pixels; send a smaller image"
+        ) from None
+    except UnidentifiedImageError:
+        raise Unprocessable(
+            "the file is not a readable JPEG or PNG image", errors=_field_error("not an image")
+        ) from None
+    except (OSError, SyntaxError, ValueError) as exc:
+        raise Unprocessable(
+            f"the image is damaged or truncated ({exc}); send the whole file",
+            errors=_field_error("damaged or truncated image"),
+        ) from None
+    return CheckedImage(hashlib.sha256(data).hexdigest(), kind[0], kind[1], width, height)
+
+
+def image_path(image_dir: Path, sha256: str, suffix: str) -> Path:
+    return image_dir / sha256[:2] / f"{sha256}{suffix}"
+
+
+def store_image(image_dir: Path, checked: CheckedImage, data: bytes) -> Path:
+    """Write once under its SHA-256; a crash never leaves a half-written file under that name."""
+    path = image_path(image_dir, checked.sha256, checked.suffix)
+    if path.exists():
+        return path
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(path.suffix + f".{os.getpid()}.tmp")
+    with open(tmp, "wb") as handle:
+        handle.write(data)
+        handle.flush()
+        os.fsync(handle.fileno())
+    os.replace(tmp, path)
+    return path
+
+
+def load_bgr(path: Path) -> NDArray[np.uint8]:
+    """Decode a stored image to an (H, W, 3) uint8 BGR array."""
+    with Image.open(path) as image:
+        rgb = np.asarray(image.convert("RGB"))
+    return np.ascontiguousarray(rgb[:, :, ::-1])

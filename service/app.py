@@ -1,0 +1,69 @@
+"""The FastAPI application factory."""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+from fastapi import FastAPI
+from fastapi.openapi.utils import get_openapi
+
+from ingest.router import router as ingest_router
+from ingest.schemas import EVENT_ADAPTER, EventBatch
+from service import features
+from service.clearance.router import router as clearance_router
+from service.errors import install_error_handlers
+from service.fleet.review import router as fleet_review_router
+from service.fleet.router import router as fleet_router
+from service.fleet.schedule import lifespan as fleet_lifespan
+from service.health import router as health_router
+from service.review.router import router as review_router
+from service.settings import get_settings
+from service.setup.router import router as setup_router
+
+API = "/api/v1"
+
+
+def _openapi(app: FastAPI) -> dict[str, Any]:
+    """The generated document, plus the event schemas that ``POST /events`` validates by hand."""
+    if app.openapi_schema:
+        return app.openapi_schema
+    schema = get_openapi(
+        title=app.title, version=app.version, routes=app.routes, description=app.description
+    )
+    components = schema.setdefault("components", {}).setdefault("schemas", {})
+    ref = "#/components/schemas/{model}"
+    event_schema = EVENT_ADAPTER.json_schema(ref_template=ref)
+    components.update(event_schema.pop("$defs", {}))
+    components["DeviceEvent"] = event_schema
+    batch_schema = EventBatch.model_json_schema(ref_template=ref)
+    components.update(batch_schema.pop("$defs", {}))
+    components["EventBatch"] = batch_schema
+    app.openapi_schema = schema
+    return schema
+
+
+def create_app() -> FastAPI:
+    settings = get_settings()
+    settings.data_dir.mkdir(parents=True, exist_ok=True)
+    logging.basicConfig(
+        level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
+    )
+    assert features.LOADED
+    app = FastAPI(
+        title="depot",
+        version="0.1.0",
+        description="Railway depot and operations service: station devices, block clearance, "
+        "car identification, predictive maintenance, motion.",
+        lifespan=fleet_lifespan,
+    )
+    install_error_handlers(app)
+    app.include_router(health_router)
+    app.include_router(setup_router, prefix=API)
+    app.include_router(ingest_router, prefix=API)
+    app.include_router(clearance_router, prefix=API)
+    app.include_router(review_router)
+    app.include_router(fleet_router, prefix=API)
+    app.include_router(fleet_review_router)
+    app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]
+    return app

@@ -1,0 +1,200 @@
+"""Attaching evidence to runs by section, station side and time, and gathering it for a decision."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import datetime, timedelta
+from typing import Any
+
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session
+
+from identification.consist import compare_consists
+from ingest.models import RawEvent, Snapshot
+from service.clearance.models import AxleReading, CarPassage, Run
+from service.clearance.rules import ConsistEvidence, RunEvidence, TailEvidence
+from service.settings import get_settings
+from service.setup.models import Car, Device, Section
+from service.setup.service import section_devices
+from tail_check.profile import CameraProfile
+
+# Readers and cameras sense the train around the interlocking's departure/arrival report, not at
+# the same instant: evidence within this window of a run still belongs to it.
+EVIDENCE_WINDOW = timedelta(minutes=10)
+EVIDENCE_DEVICE_KINDS = ("camera", "wheel_mark_reader", "ir_reader", "axle_counter")
+DEFAULT_ABSENT_CONFIDENCE = CameraProfile().absent_confidence
+
+
+def run_at(session: Session, section: str, at: datetime) -> Run | None:
+    """The run holding ``section`` at time ``at`` (one train per section: the block's guarantee)."""
+    candidates = session.scalars(
+        select(Run)
+        .where(Run.section == section, Run.status != "conflict")
+        .where(Run.departed_at <= at + EVIDENCE_WINDOW)
+        .order_by(Run.departed_at.desc())
+        .limit(2)
+    ).all()
+    for run in candidates:
+        if run.arrived_at is None or at <= run.arrived_at + EVIDENCE_WINDOW:
+            return run
+    return None
+
+
+def side_of(run: Run, station: str) -> str | None:
+    if station == run.from_station:
+        return "departure"
+    if station == run.to_station:
+        return "arrival"
+    return None
+
+
+def last_seen_before(session: Session, device_id: str, at: datetime) -> datetime | None:
+    """Latest device time of anything the device sent up to ``at`` (deterministic on replay)."""
+    return session.scalar(
+        select(func.max(RawEvent.occurred_at)).where(
+            RawEvent.device_id == device_id, RawEvent.occurred_at <= at
+        )
+    )
+
+
+def stale_devices(session: Session, section: Section, station: str, at: datetime) -> list[str]:
+    limit = timedelta(seconds=get_settings().heartbeat_s)
+    stale = []
+    for device in section_devices(session, section, station):
+        if device.kind not in EVIDENCE_DEVICE_KINDS:
+            continue
+        seen = last_seen_before(session, device.id, at)
+        if seen is None or at - seen > limit:
+            stale.append(device.id)
+    return stale
+
+
+def _tail(snapshots: list[Snapshot], side: str) -> TailEvidence | None:
+    mine = [s for s in snapshots if s.side == side and s.verdict is not None]
+    if not mine:
+        return None
+    latest = max(mine, key=lambda s: (s.occurred_at, s.id))
+    threshold = (latest.detection or {}).get("absent_confidence", DEFAULT_ABSENT_CONFIDENCE)
+    return TailEvidence(
+        verdict=latest.verdict,  # type: ignore[arg-type]
+        score=float(latest.score or 0.0),
+        snapshot_id=latest.id,
+        absent_confidence=float(threshold),
+    )
+
+
+def _car_label(passage: CarPassage) -> str | None:
+    if passage.car_id is not None:
+        return passage.car_id
+    return None if passage.number is None else f"#{passage.number}"
+
+
+def consists(passages: list[CarPassage]) -> dict[str, dict[str, list[str | None]]]:
+    """Consists per technology family (``wheel``/``ir``) and side, in passing order."""
+    out: dict[str, dict[str, list[str | None]]] = {}
+    for passage in sorted(passages, key=lambda p: (p.occurred_at, p.id)):
+        family = "wheel" if passage.kind == "wheel_marks" else "ir"
+        out.setdefault(family, {}).setdefault(passage.side or "", []).append(_car_label(passage))
+    return out
+
+
+def compare_families(
+    families: dict[str, dict[str, list[str | None]]],
+) -> tuple[ConsistEvidence | None, dict[str, Any]]:
+    """Compare departure and arrival consists of each family; the gravest outcome counts."""
+    gravity = {"missing": 2, "unknown": 1, "identical": 0}
+    chosen: ConsistEvidence | None = None
+    shown: dict[str, Any] = {}
+    for family, sides in sorted(families.items()):
+        departure, arrival = sides.get("departure"), sides.get("arrival")
+        if not departure or not arrival:
+            continue
+        comparison = compare_consists(departure, arrival)
+        shown[family] = {
+            "status": comparison.status,
+            "reason": comparison.reason,
+            "aligned": [list(row) for row in comparison.aligned],
+        }
+        item = ConsistEvidence(status=comparison.status, reason=comparison.reason)
+        if chosen is None or gravity[item.status] > gravity[chosen.status]:
+            chosen = item
+    return chosen, shown
+
+
+def _axles(
+    session: Session, readings: list[AxleReading], side: str, family_cars: list[str | None] | None
+) -> int | None:
+    mine = [r for r in readings if r.side == side]
+    if mine:
+        return max(mine, key=lambda r: (r.occurred_at, r.id)).axles
+    if not family_cars or any(car is None or car.startswith("#") for car in family_cars):
+        return None
+    cars = [session.get(Car, car) for car in family_cars]
+    return None if any(c is None for c in cars) else sum(c.axles for c in cars if c is not None)
+
+
+@dataclass(frozen=True)
+class Gathered:
+    evidence: RunEvidence
+    summary: dict[str, Any]
+
+
+def gather(session: Session, run: Run, section: Section) -> Gathered:
+    """Everything attached to the run, with stale devices' evidence counted missing."""
+    at = run.arrived_at or run.departed_at
+    stale = set(stale_devices(session, section, run.to_station, at))
+    stale |= set(stale_devices(session, section, run.from_station, run.departed_at))
+    snapshots = [
+        s
+        for s in session.scalars(select(Snapshot).where(Snapshot.run_id == run.id))
+        if s.device_id not in stale
+    ]
+    passages = [
+        p
+        for p in session.scalars(select(CarPassage).where(CarPassage.run_id == run.id))
+        if p.device_id not in stale
+    ]
+    readings = [
+        r
+        for r in session.scalars(select(AxleReading).where(AxleReading.run_id == run.id))
+        if r.device_id not in stale
+    ]
+    families = consists(passages)
+    consist, shown = compare_families(families)
+    best = families.get("wheel") or families.get("ir") or {}
+    evidence = RunEvidence(
+        arrival_tail=_tail(snapshots, "arrival"),
+        departure_tail=_tail(snapshots, "departure"),
+        consist=consist,
+        departure_axles=_axles(session, readings, "departure", best.get("departure")),
+        arrival_axles=_axles(session, readings, "arrival", best.get("arrival")),
+        stale_devices=tuple(sorted(stale)),
+    )
+    summary = {
+        "tail": {
+            side: None
+            if tail is None
+            else {
+                "verdict": tail.verdict,
+                "score": round(tail.score, 3),
+                "snapshot_id": tail.snapshot_id,
+            }
+            for side, tail in (
+                ("departure", evidence.departure_tail),
+                ("arrival", evidence.arrival_tail),
+            )
+        },
+        "consists": {
+            family: {side: cars for side, cars in sides.items()}
+            for family, sides in families.items()
+        },
+        "consist_comparison": shown,
+        "axles": {"departure": evidence.departure_axles, "arrival": evidence.arrival_axles},
+        "stale_devices": sorted(stale),
+        "snapshot_ids": sorted(s.id for s in snapshots),
+    }
+    return Gathered(evidence, summary)
+
+
+def devices_of(session: Session, ids: list[str]) -> list[Device]:
+    return list(session.scalars(select(Device).where(Device.id.in_(ids))))

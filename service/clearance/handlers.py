@@ -1,0 +1,123 @@
+"""Derivations of the clearance feature: runs, reader passages, axle counts, tail snapshots."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from sqlalchemy import select
+
+from identification import manchester, time_pulse, wheel_marks
+from identification.consist import majority_number
+from ingest.handlers import Derivation, handles
+from service.clearance import service
+from service.clearance.models import AxleReading, CarPassage, WheelMarking
+from service.setup.models import Car
+
+
+@handles("train_departed")
+def _departed(d: Derivation) -> dict[str, Any]:
+    return service.open_run(
+        d.session, d.raw.id, d.event.section, d.event.train, d.event.occurred_at
+    )
+
+
+@handles("train_arrived")
+def _arrived(d: Derivation) -> dict[str, Any]:
+    return service.close_run(
+        d.session, d.event.section, d.device.station, d.event.train, d.event.occurred_at
+    )
+
+
+@handles("axle_count")
+def _axles(d: Derivation) -> dict[str, Any]:
+    row = AxleReading(
+        id=d.raw.id,
+        device_id=d.device.id,
+        station=d.device.station,
+        section=d.event.section,
+        occurred_at=d.event.occurred_at,
+        axles=d.event.axles,
+    )
+    d.session.add(row)
+    return service.attach(d.session, row, d.event.section, d.device.station, d.event.occurred_at)
+
+
+def _decode_ir_pulses(event: Any) -> tuple[int | None, dict[str, Any]]:
+    result = time_pulse.decode_passage(
+        event.reply_times_us,
+        query_period_us=event.query_period_us,
+        reflection_window_us=event.reflection_window_us,
+        query_times_us=event.query_times_us,
+    )
+    return result.car_number, {"reads": list(result.reads)}
+
+
+def _decode_manchester(event: Any) -> tuple[int | None, dict[str, Any]]:
+    result = manchester.decode_passage(event.samples, samples_per_bit=event.samples_per_bit)
+    return result.car_number, {"frames_ok": result.frames_ok, "frames_bad": result.frames_bad}
+
+
+def _decode_wheel_marks(event: Any) -> tuple[int | None, dict[str, Any]]:
+    result = wheel_marks.decode_passage(event.baseline, event.axles, direction=event.direction)
+    detail = {
+        "reason": result.reason,
+        "readable_axles": result.readable_axles,
+        "margin": result.margin,
+    }
+    return result.code, detail
+
+
+def _decode_ir_id(event: Any) -> tuple[int | None, dict[str, Any]]:
+    return majority_number(event.reads), {"reads": len(event.reads)}
+
+
+# Each reader event decodes to a car number, or None when it cannot be trusted.
+DECODERS = {
+    "ir_id": _decode_ir_id,
+    "ir_pulses": _decode_ir_pulses,
+    "ir_manchester": _decode_manchester,
+    "wheel_marks": _decode_wheel_marks,
+}
+
+
+@handles("ir_id", "ir_pulses", "ir_manchester", "wheel_marks")
+def _passage(d: Derivation) -> dict[str, Any]:
+    number, detail = DECODERS[d.event.kind](d.event)
+    column = Car.wheel_code if d.event.kind == "wheel_marks" else Car.ir_number
+    car_id = None if number is None else d.session.scalar(select(Car.id).where(column == number))
+    row = CarPassage(
+        id=d.raw.id,
+        device_id=d.device.id,
+        station=d.device.station,
+        section=d.event.section,
+        occurred_at=d.event.occurred_at,
+        kind=d.event.kind,
+        number=number,
+        car_id=car_id,
+        detail=detail,
+    )
+    d.session.add(row)
+    attached = service.attach(
+        d.session, row, d.event.section, d.device.station, d.event.occurred_at
+    )
+    return {"car_number": number, "car": car_id, **attached}
+
+
+@handles("wheel_marks_written")
+def _marked(d: Derivation) -> dict[str, Any]:
+    car = d.session.get(Car, d.event.car)
+    result = wheel_marks.simulate_marking(d.event.detections, axles=car.axles if car else 4)
+    faults = list(result.faults) + ([] if car else [f"car {d.event.car} is not registered"])
+    d.session.add(
+        WheelMarking(
+            id=d.raw.id,
+            device_id=d.device.id,
+            car_id=d.event.car,
+            code=d.event.code,
+            occurred_at=d.event.occurred_at,
+            state=result.state,
+            written=list(result.written),
+            faults=faults,
+        )
+    )
+    return {"state": result.state, "written": list(result.written), "faults": faults}

@@ -1,0 +1,97 @@
+"""Runs through block sections, the evidence attached to them, and the dispatcher audit."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import JSON, Boolean, ForeignKey, Integer, String, Text
+from sqlalchemy.orm import Mapped, mapped_column
+
+from ingest.models import BigId
+from service.database import Base, UTCDateTime, utcnow
+
+
+class Run(Base):
+    """One train's occupation of a block section; its id is the departure event's raw id."""
+
+    __tablename__ = "runs"
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=False)
+    section: Mapped[str] = mapped_column(ForeignKey("sections.id"), index=True)
+    train: Mapped[str] = mapped_column(String(32))
+    from_station: Mapped[str] = mapped_column(String(32))
+    to_station: Mapped[str] = mapped_column(String(32))
+    departed_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    arrived_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+    # "running" (in the section), "arrived", or "conflict" (departed into an occupied section).
+    status: Mapped[str] = mapped_column(String(16), default="running")
+    verdict: Mapped[str | None] = mapped_column(String(16), nullable=True)
+    reasons: Mapped[list[str]] = mapped_column(JSON, default=list)
+    auto: Mapped[bool] = mapped_column(Boolean, default=True)
+    decided_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+    evidence: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
+
+
+class CarPassage(Base):
+    """One car passing a reader, decoded; derived from a reader event (same id)."""
+
+    __tablename__ = "car_passages"
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=False)
+    device_id: Mapped[str] = mapped_column(ForeignKey("devices.id"))
+    station: Mapped[str] = mapped_column(String(32))
+    section: Mapped[str] = mapped_column(String(32), index=True)
+    occurred_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    kind: Mapped[str] = mapped_column(String(32))
+    number: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    car_id: Mapped[str | None] = mapped_column(String(32), nullable=True)
+    detail: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
+    run_id: Mapped[int | None] = mapped_column(BigId, nullable=True, index=True)
+    side: Mapped[str | None] = mapped_column(String(16), nullable=True)
+
+
+class AxleReading(Base):
+    __tablename__ = "axle_readings"
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=False)
+    device_id: Mapped[str] = mapped_column(ForeignKey("devices.id"))
+    station: Mapped[str] = mapped_column(String(32))
+    section: Mapped[str] = mapped_column(String(32), index=True)
+    occurred_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    axles: Mapped[int] = mapped_column(Integer)
+    run_id: Mapped[int | None] = mapped_column(BigId, nullable=True, index=True)
+    side: Mapped[str | None] = mapped_column(String(16), nullable=True)
+
+
+class WheelMarking(Base):
+    """The outcome of writing wheel marks on a car at a marking station (same id as its event)."""
+
+    __tablename__ = "wheel_markings"
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=False)
+    device_id: Mapped[str] = mapped_column(ForeignKey("devices.id"))
+    car_id: Mapped[str] = mapped_column(String(32), index=True)
+    code: Mapped[int] = mapped_column(Integer)
+    occurred_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    state: Mapped[str] = mapped_column(String(16))
+    written: Mapped[list[bool]] = mapped_column(JSON, default=list)
+    faults: Mapped[list[str]] = mapped_column(JSON, default=list)
+
+
+class AuditRecord(Base):
+    """A dispatcher's action on a run: append-only, with the evidence as it stood."""
+
+    __tablename__ = "audit_records"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    run_id: Mapped[int] = mapped_column(BigId, index=True)
+    section: Mapped[str] = mapped_column(String(32))
+    action: Mapped[str] = mapped_column(String(32))
+    reason: Mapped[str] = mapped_column(Text)
+    actor: Mapped[str] = mapped_column(String(64))
+    actor_role: Mapped[str] = mapped_column(String(16))
+    recorded_at: Mapped[datetime] = mapped_column(UTCDateTime(), default=utcnow)
+    state_before: Mapped[str] = mapped_column(String(32))
+    state_after: Mapped[str] = mapped_column(String(32))
+    evidence: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)

@@ -1,0 +1,151 @@
+"""Dispatcher API: sections, runs, decisions, audit, snapshot images."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query
+from fastapi.responses import FileResponse, Response
+from sqlalchemy import or_, select
+
+import tail_check
+from ingest.models import Snapshot
+from ingest.snapshots import load_bgr
+from service.auth import CurrentDispatcher, CurrentReader
+from service.clearance import service
+from service.clearance.models import AuditRecord, Run
+from service.clearance.schemas import DecisionIn
+from service.clearance.tail import camera_profile, snapshot_file
+from service.clearance.views import audit_out, run_out, section_out
+from service.database import DbSession, utcnow
+from service.errors import NotFound
+from service.setup.models import Section
+
+router = APIRouter(tags=["dispatcher"])
+
+
+@router.get("/sections")
+def list_sections(session: DbSession, _: CurrentReader) -> list[dict[str, Any]]:
+    return [section_out(session, s) for s in session.scalars(select(Section).order_by(Section.id))]
+
+
+@router.get("/sections/{section_id}")
+def get_section(section_id: str, session: DbSession, _: CurrentReader) -> dict[str, Any]:
+    section = session.get(Section, section_id)
+    if section is None:
+        raise NotFound(f"section {section_id!r} does not exist")
+    return section_out(session, section)
+
+
+@router.get("/runs")
+def list_runs(
+    session: DbSession,
+    _: CurrentReader,
+    section: str | None = None,
+    state: Annotated[
+        str | None, Query(description="running, arrived, conflict, or a verdict")
+    ] = None,
+    limit: Annotated[int, Query(ge=1, le=500)] = 50,
+    cursor: Annotated[int | None, Query(description="next_cursor of the previous page")] = None,
+) -> dict[str, Any]:
+    query = select(Run).order_by(Run.id.desc()).limit(limit + 1)
+    if section:
+        query = query.where(Run.section == section)
+    if state:
+        query = query.where(or_(Run.status == state, Run.verdict == state))
+    if cursor is not None:
+        query = query.where(Run.id < cursor)
+    runs = session.scalars(query).all()
+    page = runs[:limit]
+    return {
+        "items": [run_out(session, r) for r in page],
+        "next_cursor": page[-1].id if len(runs) > limit else None,
+    }
+
+
+@router.get("/runs/{run_id}")
+def get_run(run_id: int, session: DbSession, _: CurrentReader) -> dict[str, Any]:
+    run = session.get(Run, run_id)
+    if run is None:
+        raise NotFound(f"run {run_id} does not exist")
+    return run_out(session, run)
+
+
+@router.post(
+    "/runs/{run_id}/decision", responses={409: {"description": "not current or not arrived"}}
+)
+def decide_run(
+    run_id: int, body: DecisionIn, session: DbSession, who: CurrentDispatcher
+) -> dict[str, Any]:
+    record = service.act(session, run_id, body.action, body.reason, who, utcnow())
+    run = session.get_one(Run, run_id)
+    section = session.get_one(Section, run.section)
+    return {
+        "audit": audit_out(record) if record else None,
+        "section": section.id,
+        "state": section.state,
+    }
+
+
+@router.get("/audit")
+def list_audit(
+    session: DbSession,
+    _: CurrentReader,
+    run: int | None = None,
+    limit: Annotated[int, Query(ge=1, le=1000)] = 200,
+) -> list[dict[str, Any]]:
+    query = select(AuditRecord).order_by(AuditRecord.id.desc()).limit(limit)
+    if run is not None:
+        query = query.where(AuditRecord.run_id == run)
+    return [audit_out(r) for r in session.scalars(query)]
+
+
+def _snapshot(session: DbSession, snapshot_id: int) -> Snapshot:
+    snapshot = session.get(Snapshot, snapshot_id)
+    if snapshot is None:
+        raise NotFound(f"snapshot {snapshot_id} does not exist")
+    return snapshot
+
+
+@router.get("/snapshots/{snapshot_id}", response_class=FileResponse)
+def get_snapshot_image(snapshot_id: int, session: DbSession, _: CurrentReader) -> Any:
+    snapshot = _snapshot(session, snapshot_id)
+    return FileResponse(
+        snapshot_file(snapshot),
+        media_type=snapshot.content_type,
+        headers={"Cache-Control": "private, max-age=86400"},
+    )
+
+
+@router.get("/snapshots/{snapshot_id}/meta")
+def get_snapshot_meta(snapshot_id: int, session: DbSession, _: CurrentReader) -> dict[str, Any]:
+    s = _snapshot(session, snapshot_id)
+    return {
+        "id": s.id,
+        "device": s.device_id,
+        "section": s.section,
+        "run_id": s.run_id,
+        "side": s.side,
+        "occurred_at": s.occurred_at.isoformat(),
+        "sha256": s.sha256,
+        "width": s.width,
+        "height": s.height,
+        "verdict": s.verdict,
+        "score": s.score,
+        "detection": s.detection,
+    }
+
+
+@router.get(
+    "/snapshots/{snapshot_id}/overlay",
+    response_class=Response,
+    responses={200: {"content": {"image/png": {}}}},
+)
+def get_snapshot_overlay(snapshot_id: int, session: DbSession, _: CurrentReader) -> Response:
+    snapshot = _snapshot(session, snapshot_id)
+    image = load_bgr(snapshot_file(snapshot))
+    profile = camera_profile(snapshot.device_id)
+    png = tail_check.overlay_png(image, tail_check.detect(image, profile), profile)
+    return Response(
+        png, media_type="image/png", headers={"Cache-Control": "private, max-age=86400"}
+    )

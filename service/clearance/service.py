@@ -1,0 +1,223 @@
+"""Runs: departure opens one, arrival closes and decides it; evidence re-evaluates; people act."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from service.auth import Principal
+from ingest.models import Snapshot
+from service.clearance.evidence import EVIDENCE_WINDOW, gather, run_at, side_of
+from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run
+from service.clearance.rules import decide, section_state
+from service.errors import Conflict, NotFound
+from service.setup.models import Section
+
+BUSY_STATES = ("occupied", "awaiting_confirmation", "review", "alarm", "blocked")
+
+
+def lock_section(session: Session, section_id: str) -> Section:
+    """The section row, locked for the transaction: one writer decides a section at a time."""
+    section = session.scalar(select(Section).where(Section.id == section_id).with_for_update())
+    if section is None:
+        raise NotFound(f"section {section_id!r} does not exist")
+    return section
+
+
+def _set_state(section: Section, state: str, at: datetime) -> None:
+    if section.state != state:
+        section.state = state
+        section.state_since = at
+
+
+def open_run(
+    session: Session, run_id: int, section_id: str, train: str, at: datetime
+) -> dict[str, Any]:
+    """``train_departed``: the train takes the block, or a conflict is recorded and raised."""
+    section = lock_section(session, section_id)
+    run = Run(
+        id=run_id,
+        section=section.id,
+        train=train,
+        from_station=section.from_station,
+        to_station=section.to_station,
+        departed_at=at,
+        status="running",
+        reasons=[],
+        evidence={},
+    )
+    if section.state in BUSY_STATES:
+        holder = session.get(Run, section.current_run_id) if section.current_run_id else None
+        run.status = "conflict"
+        run.verdict = None
+        detail = f"train {train} departed into section {section.id}, which is {section.state}" + (
+            f" (run {holder.id}, train {holder.train})" if holder else ""
+        )
+        run.reasons = [detail]
+        session.add(run)
+        _set_state(section, "alarm", at)
+        session.flush()
+        return {"run": run_id, "conflict": True, "detail": detail, "section_state": section.state}
+    session.add(run)
+    section.current_run_id = run_id
+    _set_state(section, "occupied", at)
+    adopted = adopt_departure_evidence(session, run)
+    session.flush()
+    return {"run": run_id, "section_state": section.state, "adopted_evidence": adopted}
+
+
+def adopt_departure_evidence(session: Session, run: Run) -> int:
+    """Departure-side readers and cameras see the train just before the interlocking reports
+    the departure: their evidence, stored without a run, now joins this run."""
+    adopted = 0
+    for model in (Snapshot, CarPassage, AxleReading):
+        rows = session.scalars(
+            select(model).where(
+                model.run_id.is_(None),
+                model.section == run.section,
+                model.station == run.from_station,
+                model.occurred_at >= run.departed_at - EVIDENCE_WINDOW,
+                model.occurred_at <= run.departed_at,
+            )
+        ).all()
+        for row in rows:
+            row.run_id, row.side = run.id, "departure"
+        adopted += len(rows)
+    return adopted
+
+
+def close_run(
+    session: Session, section_id: str, station: str, train: str, at: datetime
+) -> dict[str, Any]:
+    """``train_arrived``: the current run arrives at the far station and is decided."""
+    section = lock_section(session, section_id)
+    run = session.get(Run, section.current_run_id) if section.current_run_id else None
+    if run is None or run.status != "running":
+        return {"run": None, "warning": f"no train was running in section {section.id}"}
+    if station != run.to_station:
+        return {
+            "run": run.id,
+            "warning": f"arrival reported at {station}, but run {run.id} goes to {run.to_station}",
+        }
+    run.arrived_at = at
+    run.status = "arrived"
+    notes = (
+        []
+        if train == run.train
+        else [f"arrival reported train {train}, departure train {run.train}"]
+    )
+    return evaluate(session, run, section, notes=notes)
+
+
+def _next_state(current: str, verdict: str, mode: str) -> str:
+    """Where the section goes after a (re-)decision of the run holding it.
+
+    Proof of loss always raises the alarm (even on a section already freed). Otherwise only the
+    states that wait for evidence follow the verdict: an alarm or a dispatcher's block is left
+    for a person, and a freed section is not closed again by mere doubt.
+    """
+    if verdict == "incomplete":
+        return current if current == "blocked" else "alarm"
+    if current in ("occupied", "review", "awaiting_confirmation"):
+        return section_state(verdict, mode)  # type: ignore[arg-type]
+    return current
+
+
+def evaluate(
+    session: Session, run: Run, section: Section, *, notes: list[str] | None = None
+) -> dict[str, Any]:
+    """Decide an arrived run from its evidence; the section follows when the run holds it."""
+    gathered = gather(session, run, section)
+    decision = decide(gathered.evidence)
+    verdict, reasons = decision.verdict, [*decision.reasons, *(notes or [])]
+    if notes and verdict == "complete":
+        verdict = "undetermined"  # a mismatched train number needs a person's eyes
+    run.verdict, run.reasons, run.evidence = verdict, reasons, gathered.summary
+    if run.decided_at is None:
+        run.decided_at = run.arrived_at
+    at = run.arrived_at or run.departed_at
+    if section.current_run_id == run.id:
+        _set_state(section, _next_state(section.state, verdict, section.mode), at)
+        if section.state == "free":
+            promote_conflict(session, section, at)
+    session.flush()
+    return {"run": run.id, "verdict": verdict, "reasons": reasons, "section_state": section.state}
+
+
+def promote_conflict(session: Session, section: Section, at: datetime) -> None:
+    """When a section frees, a train recorded as a conflict (still in it) now holds it."""
+    waiting = session.scalar(
+        select(Run)
+        .where(Run.section == section.id, Run.status == "conflict")
+        .order_by(Run.departed_at)
+    )
+    if waiting is not None:
+        waiting.status = "running"
+        section.current_run_id = waiting.id
+        _set_state(section, "occupied", at)
+
+
+def attach(
+    session: Session, row: Any, section_id: str, station: str, at: datetime
+) -> dict[str, Any]:
+    """Attach a piece of evidence to the run holding the section then; re-decide if arrived."""
+    section = lock_section(session, section_id)
+    run = run_at(session, section_id, at)
+    if run is None:
+        row.run_id, row.side = None, None
+        session.flush()
+        return {"run": None, "note": f"no run in section {section_id} at that time; evidence kept"}
+    row.run_id, row.side = run.id, side_of(run, station)
+    session.flush()
+    if run.status == "arrived":
+        return {"run": run.id, "side": row.side, "reevaluated": evaluate(session, run, section)}
+    return {"run": run.id, "side": row.side}
+
+
+def act(
+    session: Session,
+    run_id: int,
+    action: str,
+    reason: str,
+    actor: Principal,
+    at: datetime,
+    *,
+    audit: bool = True,
+) -> AuditRecord | None:
+    """A dispatcher's ``clear`` or ``keep_blocked`` on the section's current, arrived run."""
+    run = session.get(Run, run_id)
+    if run is None:
+        raise NotFound(f"run {run_id} does not exist")
+    section = lock_section(session, run.section)
+    if section.current_run_id != run.id:
+        raise Conflict(f"run {run_id} is not the current run of section {section.id}")
+    if run.status != "arrived":
+        raise Conflict(
+            f"run {run_id} has not arrived yet; the train is still in section {section.id}"
+        )
+    before = section.state
+    gathered = gather(session, run, section)
+    _set_state(section, "free" if action == "clear" else "blocked", at)
+    run.auto = False
+    if action == "clear":
+        promote_conflict(session, section, at)
+    record = None
+    if audit:
+        record = AuditRecord(
+            run_id=run.id,
+            section=section.id,
+            action=action,
+            reason=reason,
+            actor=actor.name,
+            actor_role=actor.role,
+            recorded_at=at,
+            state_before=before,
+            state_after=section.state,
+            evidence={"verdict": run.verdict, "reasons": run.reasons, **gathered.summary},
+        )
+        session.add(record)
+    session.flush()
+    return record

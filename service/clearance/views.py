@@ -1,0 +1,80 @@
+"""JSON views of sections, runs and audit records (shared by the API and the review screen)."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from service.clearance.models import AuditRecord, Run
+from service.setup.models import Section
+
+QUEUE_STATES = ("alarm", "review", "awaiting_confirmation", "blocked")
+
+
+def _iso(value: datetime | None) -> str | None:
+    return None if value is None else value.isoformat().replace("+00:00", "Z")
+
+
+def audit_out(record: AuditRecord) -> dict[str, Any]:
+    return {
+        "id": record.id,
+        "run_id": record.run_id,
+        "section": record.section,
+        "action": record.action,
+        "reason": record.reason,
+        "actor": record.actor,
+        "actor_role": record.actor_role,
+        "recorded_at": _iso(record.recorded_at),
+        "state_before": record.state_before,
+        "state_after": record.state_after,
+        "evidence": record.evidence,
+    }
+
+
+def run_out(session: Session, run: Run) -> dict[str, Any]:
+    overrides = session.scalars(
+        select(AuditRecord).where(AuditRecord.run_id == run.id).order_by(AuditRecord.id)
+    ).all()
+    return {
+        "id": run.id,
+        "section": run.section,
+        "train": run.train,
+        "status": run.status,
+        "from_station": run.from_station,
+        "to_station": run.to_station,
+        "departed_at": _iso(run.departed_at),
+        "arrived_at": _iso(run.arrived_at),
+        "evidence": run.evidence,
+        "decision": None
+        if run.verdict is None and run.status != "conflict"
+        else {
+            "verdict": run.verdict or "undetermined",
+            "reasons": run.reasons,
+            "auto": run.auto,
+        },
+        "overrides": [audit_out(r) for r in overrides],
+    }
+
+
+def section_out(session: Session, section: Section) -> dict[str, Any]:
+    run = None
+    if section.current_run_id is not None and section.state != "free":
+        found = session.get(Run, section.current_run_id)
+        run = run_out(session, found) if found else None
+    conflicts = session.scalars(
+        select(Run.id).where(Run.section == section.id, Run.status == "conflict")
+    ).all()
+    return {
+        "id": section.id,
+        "state": section.state,
+        "mode": section.mode,
+        "from_station": section.from_station,
+        "to_station": section.to_station,
+        "state_since": _iso(section.state_since),
+        "last_run_id": section.current_run_id,
+        "conflict_runs": list(conflicts),
+        "run": run,
+    }

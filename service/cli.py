@@ -1,0 +1,126 @@
+"""The ``depot`` command line: serve, migrate, users, demo, replay, and each part's tools."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+from collections.abc import Sequence
+
+from sqlalchemy.exc import IntegrityError
+
+from service import commands
+from service.database import get_sessionmaker
+from service.errors import DepotError
+from service.settings import get_settings
+
+
+def _serve(args: argparse.Namespace) -> int:
+    import uvicorn
+
+    settings = get_settings()
+    if args.migrate:
+        _migrate(args)
+    uvicorn.run(
+        "service.app:create_app",
+        factory=True,
+        host=args.host or settings.host,
+        port=args.port or settings.port,
+        workers=args.workers,
+        log_level="info",
+    )
+    return 0
+
+
+def _migrate(_: argparse.Namespace) -> int:
+    from service.migrate import upgrade
+
+    settings = get_settings()
+    settings.data_dir.mkdir(parents=True, exist_ok=True)
+    upgrade(settings.resolved_database_url)
+    print(f"database at head: {settings.resolved_database_url.split('@')[-1]}")
+    return 0
+
+
+def _user_add(args: argparse.Namespace) -> int:
+    from service.setup.service import create_user
+
+    with get_sessionmaker().begin() as session:
+        token = create_user(session, args.name, args.role)
+    print(f"user {args.name} ({args.role}) created. Token (shown once, store it now):")
+    print(token)
+    return 0
+
+
+def _replay(_: argparse.Namespace) -> int:
+    from service import features
+    from service.replay import replay
+
+    assert features.LOADED
+    with get_sessionmaker().begin() as session:
+        counts = replay(session)
+    print(
+        f"replayed {counts['events']} raw events ({counts['failed']} failed to derive),"
+        f" re-applied {counts['actions']} dispatcher actions"
+        f" ({counts['refused_actions']} no longer apply)"
+    )
+    return 0 if counts["failed"] == 0 else 1
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from service.demo import load_demo
+
+    return load_demo(force=args.force)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="depot", description="Railway depot and operations service."
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    serve = sub.add_parser("serve", help="serve the HTTP API and the review screen")
+    serve.add_argument("--host")
+    serve.add_argument("--port", type=int)
+    serve.add_argument("--workers", type=int, default=1)
+    serve.add_argument("--migrate", action="store_true", help="migrate the database first")
+    serve.set_defaults(func=_serve)
+    sub.add_parser(
+        "migrate", help="bring the database schema to the latest migration"
+    ).set_defaults(func=_migrate)
+    user = sub.add_parser("user", help="manage people's tokens").add_subparsers(
+        dest="user_command", metavar="ACTION"
+    )
+    add = user.add_parser("add", help="add a person; prints their token once")
+    add.add_argument("name")
+    add.add_argument("--role", required=True, choices=("dispatcher", "engineer"))
+    add.set_defaults(func=_user_add)
+    demo = sub.add_parser("demo", help="load the demo line and a simulated day of traffic")
+    demo.add_argument("--force", action="store_true", help="load even if data is already there")
+    demo.set_defaults(func=_demo)
+    sub.add_parser("replay", help="rebuild derived tables from the raw events").set_defaults(
+        func=_replay
+    )
+    for module in pkgutil.iter_modules(commands.__path__):
+        importlib.import_module(f"service.commands.{module.name}").register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not hasattr(args, "func"):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args))
+    except DepotError as exc:
+        print(f"depot: {exc.detail}", file=sys.stderr)
+        return 2
+    except IntegrityError as exc:
+        print(f"depot: the database refused the change ({exc.orig})", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

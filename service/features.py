@@ -1,0 +1,8 @@
+"""Importing this module registers every feature's event handlers with ingest."""
+
+from service.clearance import handlers as clearance_handlers
+from service.clearance import tail as clearance_tail
+from service.fleet import handlers as fleet_handlers
+
+LOADED = (clearance_handlers, clearance_tail)
+LOADED_FLEET = (fleet_handlers,)

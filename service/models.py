@@ -1,0 +1,31 @@
+"""Every table, imported in one place so that Alembic and replay see the whole schema."""
+
+from ingest.models import RawEvent, Snapshot
+from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run, WheelMarking
+from service.database import Base
+from service.fleet.models import Forecast, MaintenanceOverride, Measurement, Parameter
+from service.setup.models import Car, Device, Section, Station, User
+from service.trains.models import TrainPosition
+
+metadata = Base.metadata
+
+__all__ = [
+    "AuditRecord",
+    "AxleReading",
+    "Car",
+    "CarPassage",
+    "Device",
+    "Forecast",
+    "MaintenanceOverride",
+    "Measurement",
+    "Parameter",
+    "RawEvent",
+    "Run",
+    "Section",
+    "Snapshot",
+    "Station",
+    "TrainPosition",
+    "User",
+    "WheelMarking",
+    "metadata",
+]

@@ -1,0 +1,116 @@
+"""The review screen (``/review``): server-rendered, refreshes itself, dispatcher login by token."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Form, Request
+from fastapi.responses import HTMLResponse, RedirectResponse, Response
+from fastapi.templating import Jinja2Templates
+
+from service.auth import Principal, person_for_token
+from service.clearance import service as clearance
+from service.database import DbSession, utcnow
+from service.errors import DepotError
+from service.review.service import STATE_WORDS, aligned_rows, build_screen
+from service.settings import get_settings
+
+COOKIE = "depot_review"
+templates = Jinja2Templates(directory=str(Path(__file__).parent / "templates"))
+templates.env.globals["state_words"] = STATE_WORDS
+router = APIRouter(tags=["review screen"], include_in_schema=False)
+
+
+def _who(request: Request, session: DbSession) -> Principal | None:
+    token = request.cookies.get(COOKIE)
+    return person_for_token(session, token) if token else None
+
+
+@router.get("/review/login", response_class=HTMLResponse)
+def login_form(request: Request, error: str | None = None) -> Response:
+    return templates.TemplateResponse(request, "login.html", {"error": error})
+
+
+@router.post("/review/login")
+def login(request: Request, session: DbSession, token: Annotated[str, Form()]) -> Response:
+    person = person_for_token(session, token.strip())
+    if person is None or person.role not in ("dispatcher", "admin"):
+        return templates.TemplateResponse(
+            request,
+            "login.html",
+            {"error": "That token is not a dispatcher's token."},
+            status_code=401,
+        )
+    response = RedirectResponse("/review", status_code=303)
+    response.set_cookie(
+        COOKIE,
+        token.strip(),
+        httponly=True,
+        samesite="strict",
+        secure=get_settings().environment == "production",
+        max_age=12 * 3600,
+    )
+    return response
+
+
+@router.post("/review/logout")
+def logout() -> Response:
+    response = RedirectResponse("/review/login", status_code=303)
+    response.delete_cookie(COOKIE)
+    return response
+
+
+@router.get("/review", response_class=HTMLResponse)
+def review(
+    request: Request, session: DbSession, run: int | None = None, notice: str | None = None
+) -> Response:
+    who = _who(request, session)
+    if who is None:
+        return RedirectResponse("/review/login", status_code=303)
+    screen = build_screen(session, run_id=run, now=utcnow())
+    context: dict[str, Any] = {
+        "who": who,
+        "screen": screen,
+        "notice": notice,
+        "consists": aligned_rows(screen.run) if screen.run else [],
+        "refresh_s": get_settings().review_refresh_s,
+    }
+    return templates.TemplateResponse(request, "review.html", context)
+
+
+@router.post("/review/runs/{run_id}/decision")
+def decide(
+    request: Request,
+    session: DbSession,
+    run_id: int,
+    action: Annotated[str, Form()],
+    reason: Annotated[str, Form()] = "",
+) -> Response:
+    who = _who(request, session)
+    if who is None or who.role not in ("dispatcher", "admin"):
+        return RedirectResponse("/review/login", status_code=303)
+    if action not in ("clear", "keep_blocked") or len(reason.strip()) < 3:
+        notice = "Give a reason of at least 3 characters."
+    else:
+        try:
+            clearance.act(session, run_id, action, reason.strip(), who, utcnow())
+            notice = f"Run {run_id}: {'cleared' if action == 'clear' else 'kept blocked'}."
+        except DepotError as exc:
+            notice = exc.detail
+    return RedirectResponse(
+        request.url_for("review").include_query_params(run=run_id, notice=notice), status_code=303
+    )
+
+
+@router.get("/review/snapshots/{snapshot_id}/{which}")
+def snapshot_image(request: Request, session: DbSession, snapshot_id: int, which: str) -> Response:
+    """Images for the screen, behind the screen's own login cookie."""
+    from service.clearance.router import get_snapshot_image, get_snapshot_overlay
+
+    who = _who(request, session)
+    if who is None:
+        return Response(status_code=401)
+    if which == "overlay":
+        return get_snapshot_overlay(snapshot_id, session, who)
+    return get_snapshot_image(snapshot_id, session, who)  # type: ignore[no-any-return]

@@ -1,0 +1,65 @@
+"""Service settings: one pydantic-settings class, environment prefix ``DEPOT_``."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+from typing import Literal
+
+from pydantic import Field, model_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+DEVELOPMENT_ADMIN_TOKEN = "dev-admin-token"
+
+
+class Settings(BaseSettings):
+    """Everything the service reads from its environment.
+
+    Defaults give a working local service on an embedded SQLite database; in
+    ``production`` the unsafe defaults (the well-known admin token, SQLite) are refused.
+    """
+
+    model_config = SettingsConfigDict(env_prefix="DEPOT_", env_file=".env", extra="ignore")
+
+    environment: Literal["development", "test", "production"] = "development"
+    data_dir: Path = Path("./var")
+    database_url: str | None = None
+    admin_token: str = DEVELOPMENT_ADMIN_TOKEN
+    heartbeat_s: float = Field(default=60.0, gt=0)
+    max_image_bytes: int = Field(default=10 * 1024 * 1024, gt=0)
+    max_image_pixels: int = Field(default=40_000_000, gt=0)
+    max_body_bytes: int = Field(default=8 * 1024 * 1024, gt=0)
+    max_batch: int = Field(default=1000, gt=0, le=1000)
+    forecast_every: float | None = Field(
+        default=None, gt=0, description="seconds between scheduled forecasts"
+    )
+    review_refresh_s: int = Field(default=10, ge=2)
+    host: str = "127.0.0.1"
+    port: int = 8000
+
+    @model_validator(mode="after")
+    def _refuse_unsafe_production(self) -> Settings:
+        if self.environment != "production":
+            return self
+        if self.admin_token == DEVELOPMENT_ADMIN_TOKEN or len(self.admin_token) < 24:
+            raise ValueError(
+                "DEPOT_ADMIN_TOKEN must be set to a secret of at least 24 characters in production"
+            )
+        if not self.database_url or self.database_url.startswith("sqlite"):
+            raise ValueError("DEPOT_DATABASE_URL must point to PostgreSQL in production")
+        return self
+
+    @property
+    def resolved_database_url(self) -> str:
+        if self.database_url:
+            return self.database_url
+        return f"sqlite:///{(self.data_dir / 'depot.sqlite3').resolve()}"
+
+    @property
+    def image_dir(self) -> Path:
+        return self.data_dir / "images"
+
+
+@lru_cache
+def get_settings() -> Settings:
+    return Settings()

@@ -1,0 +1,86 @@
+"""Setup API (admin): stations, sections, devices, cars."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter
+from sqlalchemy import select
+
+from service.auth import Admin, CurrentReader
+from service.database import DbSession
+from service.setup import service
+from service.setup.models import Car, Device, Station
+from service.setup.schemas import (
+    CarIn,
+    CarOut,
+    DeviceCreated,
+    DeviceIn,
+    DeviceOut,
+    SectionIn,
+    StationIn,
+    StationOut,
+)
+
+router = APIRouter(tags=["setup"])
+
+
+@router.post("/stations", status_code=201, response_model=StationOut)
+def create_station(body: StationIn, session: DbSession, _: Admin) -> Any:
+    return service.create_station(session, body)
+
+
+@router.get("/stations", response_model=list[StationOut])
+def list_stations(session: DbSession, _: CurrentReader) -> Any:
+    return session.scalars(select(Station).order_by(Station.id)).all()
+
+
+@router.get("/stations/{station_id}", response_model=StationOut)
+def get_station(station_id: str, session: DbSession, _: CurrentReader) -> Any:
+    return service.get_or_404(session, Station, station_id, "station")
+
+
+@router.post("/sections", status_code=201)
+def create_section(body: SectionIn, session: DbSession, _: Admin) -> dict[str, Any]:
+    section = service.create_section(session, body)
+    return {
+        "id": section.id,
+        "from_station": section.from_station,
+        "to_station": section.to_station,
+        "mode": section.mode,
+        "state": section.state,
+        "run": None,
+    }
+
+
+@router.post("/devices", status_code=201, response_model=DeviceCreated)
+def create_device(body: DeviceIn, session: DbSession, _: Admin) -> Any:
+    device, key = service.create_device(session, body)
+    return DeviceCreated(
+        id=device.id, station=device.station, section=device.section, kind=device.kind, key=key
+    )
+
+
+@router.get("/devices", response_model=list[DeviceOut])
+def list_devices(session: DbSession, _: CurrentReader) -> Any:
+    return session.scalars(select(Device).order_by(Device.id)).all()
+
+
+@router.get("/devices/{device_id}", response_model=DeviceOut)
+def get_device(device_id: str, session: DbSession, _: CurrentReader) -> Any:
+    return service.get_or_404(session, Device, device_id, "device")
+
+
+@router.post("/cars", status_code=201, response_model=CarOut)
+def create_car(body: CarIn, session: DbSession, _: Admin) -> Any:
+    return service.create_car(session, body)
+
+
+@router.get("/cars", response_model=list[CarOut])
+def list_cars(session: DbSession, _: CurrentReader) -> Any:
+    return session.scalars(select(Car).order_by(Car.id)).all()
+
+
+@router.get("/cars/{car_id}", response_model=CarOut)
+def get_car(car_id: str, session: DbSession, _: CurrentReader) -> Any:
+    return service.get_or_404(session, Car, car_id, "car")

@@ -1,0 +1,85 @@
+"""A train's passage through section AB, posted as the devices would post it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import UTC, datetime, timedelta
+from typing import Any
+
+import cv2
+from fastapi.testclient import TestClient
+
+from tail_check.synth import render_snapshot
+from tests.conftest import ADMIN
+
+T0 = datetime(2026, 11, 23, 10, 0, tzinfo=UTC)
+
+
+def iso(at: datetime) -> str:
+    return at.isoformat().replace("+00:00", "Z")
+
+
+def jpeg(*, disc: bool, condition: str = "day", seed: int = 7, weak: bool = False) -> bytes:
+    image, _ = render_snapshot(
+        seed, disc=disc, condition=condition, weak_disc=weak, distractors=(), occlusion=0.0
+    )
+    ok, data = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 92])
+    assert ok
+    return data.tobytes()
+
+
+@dataclass
+class Line:
+    client: TestClient
+    keys: dict[str, dict[str, str]]
+    serial: int = 0
+
+    def post(self, device: str, kind: str, at: datetime, **fields: Any) -> dict[str, Any]:
+        self.serial += 1
+        body = {
+            "event_id": f"{device}-{self.serial}",
+            "occurred_at": iso(at),
+            "kind": kind,
+            **fields,
+        }
+        response = self.client.post("/api/v1/events", json=body, headers=self.keys[device])
+        assert response.status_code == 201, response.text
+        result: dict[str, Any] = response.json()
+        return result
+
+    def heartbeat_all(self, at: datetime, *, except_: tuple[str, ...] = ()) -> None:
+        for device in self.keys:
+            if device not in except_:
+                self.post(device, "heartbeat", at)
+
+    def snapshot(self, device: str, at: datetime, data: bytes) -> dict[str, Any]:
+        self.serial += 1
+        form = {"event_id": f"{device}-{self.serial}", "occurred_at": iso(at), "section": "AB"}
+        response = self.client.post(
+            "/api/v1/snapshots",
+            data=form,
+            files={"image": ("t.jpg", data, "image/jpeg")},
+            headers=self.keys[device],
+        )
+        assert response.status_code == 201, response.text
+        result: dict[str, Any] = response.json()
+        return result
+
+    def read(self, end: str, cars: list[int], at: datetime) -> None:
+        """IR reader of one end of AB reads these car numbers (decoded on the device)."""
+        for i, car in enumerate(cars):
+            self.post(
+                f"{end}-ir", "ir_id", at + timedelta(seconds=i), section="AB", reads=[car] * 5
+            )
+
+    def section(self, ident: str = "AB") -> dict[str, Any]:
+        result: dict[str, Any] = self.client.get(f"/api/v1/sections/{ident}", headers=ADMIN).json()
+        return result
+
+    def depart(self, at: datetime = T0, train: str = "2041") -> int:
+        result = self.post("A-ilk", "train_departed", at, section="AB", train=train)
+        run: int = result["run"]
+        return run
+
+    def arrive(self, at: datetime, train: str = "2041") -> dict[str, Any]:
+        return self.post("B-ilk", "train_arrived", at, section="AB", train=train)

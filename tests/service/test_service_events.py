@@ -1,0 +1,215 @@
+"""Device events: every kind, validation, idempotency, batches, device permissions."""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+from sqlalchemy import Engine, func, select
+from sqlalchemy.orm import Session
+
+from ingest.models import RawEvent
+from tests.service.linekit import build_line, event
+
+WHEEL_AXLES = [
+    [2170, 1931, 2165, 2169, 1928, 1933, 2172, 1930],
+    [2168, 1929, 2171, 2166, 1932, 1930, 2169, 1927],
+    [2171, 1930, 2168, 2170, 1929, 1931, 2166, 1932],
+    [2169, 1933, 2170, 2168, 1930, 1928, 2171, 1929],
+]
+# One valid example of every kind (from protocol.md), with the device that may send it.
+EXAMPLES: list[tuple[str, dict[str, Any]]] = [
+    ("A-ilk", event("e1", "train_departed", section="AB", train="2041")),
+    ("B-ilk", event("e2", "train_arrived", at="2026-11-23T10:41:12Z", section="AB", train="2041")),
+    ("B-ac", event("e3", "axle_count", section="AB", axles=212)),
+    ("B-ir", event("e4", "ir_id", section="AB", reads=[117, 117, 119, 117, 117])),
+    (
+        "B-ir",
+        event(
+            "e5",
+            "ir_pulses",
+            section="AB",
+            query_period_us=1000,
+            reflection_window_us=200,
+            reply_times_us=[262.5, 118262.0, 119263.1, 237261.9],
+        ),
+    ),
+    (
+        "B-ir",
+        event(
+            "e6",
+            "ir_manchester",
+            section="AB",
+            samples_per_bit=8,
+            samples=[1, 1, 1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1],
+        ),
+    ),
+    (
+        "B-wm",
+        event(
+            "e7",
+            "wheel_marks",
+            section="AB",
+            direction=1,
+            baseline=[2051, 2049, 2050, 2052, 2048, 2050],
+            axles=WHEEL_AXLES,
+        ),
+    ),
+    (
+        "D-mark",
+        event("e8", "wheel_marks_written", car="0117", code=117, detections=["W1", "W2"] * 4),
+    ),
+    ("D-bench", event("e9", "measurement", car="0117", values={"brake_cylinder_fill_s": 3.1})),
+    (
+        "T-obu",
+        event(
+            "e10",
+            "motion_sample",
+            train="2041",
+            t=1300.5,
+            accel_mps2=-0.42,
+            gnss_speed_mps=16.7,
+            gnss_delay_s=1.8,
+        ),
+    ),
+    ("A-cam", event("e11", "heartbeat")),
+]
+
+
+@pytest.mark.parametrize(("device", "body"), EXAMPLES, ids=[b["kind"] for _, b in EXAMPLES])
+def test_every_kind_accepted_once(client: TestClient, device: str, body: dict[str, Any]) -> None:
+    keys = build_line(client)
+    first = client.post("/api/v1/events", json=body, headers=keys[device])
+    assert first.status_code == 201, first.text
+    assert first.json()["event_id"] == body["event_id"] and first.json()["status"] == "created"
+    again = client.post("/api/v1/events", json=body, headers=keys[device])
+    assert again.status_code == 200 and again.json() == first.json()
+
+
+@pytest.mark.parametrize(
+    ("body", "field"),
+    [
+        ({"event_id": "x", "kind": "axle_count", "section": "AB", "axles": 3}, "occurred_at"),
+        (event("x", "axle_count", section="AB", axles="many"), "axles"),
+        (event("x", "axle_count", section="AB", axles=-1), "axles"),
+        (event("x", "axle_count", at="yesterday", section="AB", axles=3), "occurred_at"),
+        (event("x", "axle_count", at="2026-11-23T10:15:00", section="AB", axles=3), "occurred_at"),
+        (event("", "axle_count", section="AB", axles=3), "event_id"),
+        (event("x" * 65, "axle_count", section="AB", axles=3), "event_id"),
+        (event("x", "teleport", section="AB"), "kind"),
+        (event("x", "axle_count", section="AB", axles=3, extra=1), "extra"),
+    ],
+)
+def test_invalid_events_name_the_field(
+    client: TestClient, body: dict[str, Any], field: str
+) -> None:
+    keys = build_line(client)
+    response = client.post("/api/v1/events", json=body, headers=keys["B-ac"])
+    assert response.status_code == 422, response.text
+    assert response.headers["content-type"] == "application/problem+json"
+    problem = response.json()
+    assert {"type", "title", "status", "detail", "errors"} <= problem.keys()
+    assert any(field in error["loc"] for error in problem["errors"]), problem
+
+
+def test_reused_event_id_with_other_body_conflicts(client: TestClient, session: Session) -> None:
+    keys = build_line(client)
+    body = event("ac-1", "axle_count", section="AB", axles=212)
+    assert client.post("/api/v1/events", json=body, headers=keys["B-ac"]).status_code == 201
+    clash = client.post("/api/v1/events", json={**body, "axles": 208}, headers=keys["B-ac"])
+    assert clash.status_code == 409 and clash.headers["content-type"] == "application/problem+json"
+    assert session.scalar(select(func.count()).select_from(RawEvent)) == 1
+    # Another device may use the same event_id: the key is (device, event_id).
+    assert client.post("/api/v1/events", json=body, headers=keys["A-ac"]).status_code == 201
+
+
+def test_device_kind_and_section_rules(client: TestClient) -> None:
+    keys = build_line(client)
+    departed = event("d1", "train_departed", section="AB", train="1")
+    assert client.post("/api/v1/events", json=departed, headers=keys["A-cam"]).status_code == 403
+    assert (
+        client.post("/api/v1/events", json=departed, headers={"X-Device-Key": "wrong"}).status_code
+        == 401
+    )
+    assert client.post("/api/v1/events", json=departed).status_code == 401
+    other = event("a1", "axle_count", section="BC", axles=4)
+    assert client.post("/api/v1/events", json=other, headers=keys["B-ac"]).status_code == 422
+    # A station-wide interlocking may name a section that starts or ends at its station only.
+    assert (
+        client.post(
+            "/api/v1/events", json={**departed, "section": "BC"}, headers=keys["A-ilk"]
+        ).status_code
+        == 422
+    )
+    assert client.post("/api/v1/events", json=departed, headers=keys["A-ilk"]).status_code == 201
+
+
+def test_batch_items_stand_alone(client: TestClient, session: Session) -> None:
+    keys = build_line(client)
+    good = [event(f"hb-{i}", "heartbeat") for i in range(3)]
+    batch = {
+        "events": [
+            good[0],
+            {"event_id": "bad", "kind": "heartbeat"},
+            good[1],
+            good[0],
+            good[2],
+            event("x", "train_departed", section="AB", train="1"),
+        ]
+    }
+    response = client.post("/api/v1/events", json=batch, headers=keys["B-ac"])
+    assert response.status_code == 200, response.text
+    statuses = [r["status"] for r in response.json()["results"]]
+    assert statuses == ["created", "rejected", "created", "duplicate", "created", "rejected"]
+    assert response.json()["results"][5]["error"]["status"] == 403
+    assert session.scalar(select(func.count()).select_from(RawEvent)) == 3
+
+
+def test_oversized_and_empty_batches_rejected(client: TestClient, session: Session) -> None:
+    keys = build_line(client)
+    too_many = {"events": [event(f"hb-{i}", "heartbeat") for i in range(1001)]}
+    response = client.post("/api/v1/events", json=too_many, headers=keys["B-ac"])
+    assert response.status_code == 422 and "events" in str(response.json()["errors"])
+    assert (
+        client.post("/api/v1/events", json={"events": []}, headers=keys["B-ac"]).status_code == 422
+    )
+    assert session.scalar(select(func.count()).select_from(RawEvent)) == 0
+
+
+def test_hostile_bodies(client: TestClient) -> None:
+    keys = build_line(client)
+    headers = {**keys["B-ac"], "Content-Type": "application/json"}
+    assert client.post("/api/v1/events", content=b"{not json", headers=headers).status_code == 422
+    deep = b"[" * 100_000 + b"]" * 100_000
+    assert client.post("/api/v1/events", content=deep, headers=headers).status_code in (413, 422)
+    huge = b'{"pad": "' + b"x" * (9 * 1024 * 1024) + b'"}'
+    assert client.post("/api/v1/events", content=huge, headers=headers).status_code == 413
+    text = {**keys["B-ac"], "Content-Type": "text/plain"}
+    assert client.post("/api/v1/events", content=b"hello", headers=text).status_code == 415
+
+
+def test_same_event_from_twenty_threads_is_stored_once(committed_app: Any, engine: Engine) -> None:
+    with TestClient(committed_app) as client:
+        keys = build_line(client)
+        body = event("race-1", "axle_count", section="AB", axles=212)
+        replies: list[tuple[int, Any]] = []
+        barrier = threading.Barrier(20)
+
+        def post() -> None:
+            barrier.wait()
+            response = client.post("/api/v1/events", json=body, headers=keys["B-ac"])
+            replies.append((response.status_code, response.json()))
+
+        threads = [threading.Thread(target=post) for _ in range(20)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+    codes = sorted(code for code, _ in replies)
+    assert codes.count(201) == 1 and codes.count(200) == 19, codes
+    assert len({str(reply) for _, reply in replies}) == 1
+    with engine.connect() as connection:
+        stored = connection.scalar(select(func.count()).select_from(RawEvent))
+    assert stored == 1

@@ -1,0 +1,145 @@
+"""``depot import-measurements`` and ``depot forecast``, and the in-process schedule."""
+
+from __future__ import annotations
+
+import argparse
+import threading
+import time
+from pathlib import Path
+
+import pytest
+from fastapi.testclient import TestClient
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session, sessionmaker
+
+from service.commands import fleet as commands
+from service.fleet import schedule
+from service.fleet.models import Forecast, Measurement
+from tests.conftest import ADMIN
+from tests.service.linekit import build_line
+
+WIDE = """car,taken_at,door_close_s,brake_release_s
+0117,2026-11-01T07:30:00Z,2.41,4.02
+0117,2026-11-03T07:30:00+00:00,2.45,
+0118,2026-11-01T08:00:00Z,2.38,3.97
+"""
+
+
+@pytest.fixture
+def db(client: TestClient, session: Session, monkeypatch: pytest.MonkeyPatch) -> sessionmaker:
+    """The CLI's sessions on the test's connection (committed inside its rolled-back transaction)."""
+    build_line(client)
+    factory = sessionmaker(bind=session.connection(), join_transaction_mode="create_savepoint")
+    monkeypatch.setattr(commands, "get_sessionmaker", lambda: factory)
+    return factory
+
+
+def depot(*argv: str) -> int:
+    parser = argparse.ArgumentParser()
+    commands.register(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(list(argv))
+    return int(args.func(args))
+
+
+def _csv(tmp_path: Path, text: str) -> str:
+    path = tmp_path / "bench.csv"
+    path.write_text(text, encoding="utf-8")
+    return str(path)
+
+
+def _count(session: Session) -> int:
+    return session.scalar(select(func.count()).select_from(Measurement)) or 0
+
+
+def test_import_wide_csv(db, session: Session, tmp_path: Path, capsys) -> None:
+    assert depot("import-measurements", _csv(tmp_path, WIDE)) == 0
+    assert "imported 3 tests (5 measurements)" in capsys.readouterr().out
+    rows = session.scalars(select(Measurement).order_by(Measurement.id)).all()
+    assert [(r.car_id, r.parameter, r.value, r.source) for r in rows[:2]] == [
+        ("0117", "door_close_s", 2.41, "csv"),
+        ("0117", "brake_release_s", 4.02, "csv"),
+    ]
+
+
+def test_import_long_csv(db, session: Session, tmp_path: Path, capsys) -> None:
+    text = "car,taken_at,parameter,value\n0119,2026-11-01T07:30:00Z,door_close_s,2.5\n"
+    assert depot("import-measurements", _csv(tmp_path, text)) == 0
+    assert _count(session) == 1
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("car,when,door_close_s\n0117,2026-11-01T07:30:00Z,2.4\n", "lacks the column(s) taken_at"),
+        (WIDE.replace("2.38", "abc"), "line 4, column door_close_s: 'abc' is not a finite number"),
+        (WIDE.replace("4.02", "nan"), "line 2, column brake_release_s"),
+        (WIDE.replace("0118", "9999"), "unknown car(s) 9999; register them"),
+        (WIDE.replace("2026-11-01T08:00:00Z", "2026-11-01 08:00"), "has no offset"),
+        (WIDE.replace("2026-11-01T08:00:00Z", "yesterday"), "'yesterday' is not an ISO 8601"),
+        ("car,taken_at,door_close_s\n", "holds no measurements"),
+    ],
+)
+def test_bad_csv_is_refused_whole(
+    db, session: Session, tmp_path: Path, capsys, text, expected
+) -> None:
+    assert depot("import-measurements", _csv(tmp_path, text)) == 2
+    err = capsys.readouterr().err
+    assert expected in err, err
+    assert _count(session) == 0  # nothing imported
+
+
+def test_missing_file(db, tmp_path: Path, capsys) -> None:
+    assert depot("import-measurements", str(tmp_path / "none.csv")) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_forecast_command_shows_progress(db, session: Session, capsys) -> None:
+    assert depot("forecast", "--horizon", "10") == 0
+    captured = capsys.readouterr()
+    assert "[" + "#" * 30 + "] 4/4 cars" in captured.err
+    assert "forecast 4 cars" in captured.out and "4 not_enough_history" in captured.out
+    assert session.scalar(select(func.count()).select_from(Forecast)) == 4
+    with pytest.raises(SystemExit):
+        depot("forecast", "--method", "magic")
+
+
+def test_schedule_repeats_and_survives_a_failing_round() -> None:
+    calls: list[int] = []
+    done = threading.Event()
+
+    def job() -> None:
+        calls.append(1)
+        if len(calls) == 1:
+            raise RuntimeError("database away")
+        if len(calls) >= 3:
+            done.set()
+
+    timer = schedule.ForecastSchedule(0.01, job)
+    timer.start()
+    assert done.wait(5.0)
+    timer.stop()
+    assert len(calls) >= 3 and not timer._thread.is_alive()
+
+
+def test_scheduled_round_writes_forecasts(db, session: Session) -> None:
+    run = schedule.scheduled_forecast(db)
+    assert run is not None and run.cars == 4
+    assert session.scalar(select(func.count()).select_from(Forecast)) == 4
+
+
+def test_lifespan_starts_the_schedule_only_when_configured(
+    app, db, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    with TestClient(app):
+        assert app.state.forecast_schedule is None
+    rounds = threading.Event()
+    monkeypatch.setattr(schedule, "get_sessionmaker", lambda: db)
+    monkeypatch.setattr(schedule, "scheduled_forecast", lambda factory: rounds.set())
+    settings = schedule.get_settings().model_copy(update={"forecast_every": 0.01})
+    monkeypatch.setattr(schedule, "get_settings", lambda: settings)
+    with TestClient(app) as client:
+        timer = app.state.forecast_schedule
+        assert timer is not None and rounds.wait(5.0)
+        assert client.get("/api/v1/maintenance/fleet", headers=ADMIN).status_code == 200
+    time.sleep(0.05)
+    assert not timer._thread.is_alive()

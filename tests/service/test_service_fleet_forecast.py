@@ -1,0 +1,133 @@
+"""Fleet forecasts end to end: a generated fleet posted as bench events, ranked by risk."""
+
+from __future__ import annotations
+
+from datetime import UTC, datetime, timedelta
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from service.fleet.demo import demo_fleet, load_fleet_history, register_parameters
+from service.fleet.history import pivot
+from service.fleet.models import Forecast, Measurement
+from service.fleet.service import record_measurements
+from tests.conftest import ADMIN
+from tests.service.linekit import build_line, post_ok
+
+END = datetime(2026, 11, 23, 6, 0, tzinfo=UTC)
+FLEET = [f"0{n}" for n in range(201, 217)]  # 16 cars: 3 of them leave tolerance within 30 tests
+
+
+LINE_CARS = ["0117", "0118", "0119", "0120"]
+
+
+@pytest.fixture
+def stored(client: TestClient, session: Session) -> list[str]:
+    """The line's four cars with 100 bench tests each, stored directly, and a forecast run."""
+    build_line(client)
+    register_parameters(client, ADMIN)
+    fleet = demo_fleet(len(LINE_CARS), seed=5)
+    for c, car in enumerate(LINE_CARS):
+        for i in range(fleet.histories.shape[1]):
+            at = END - timedelta(days=2 * (fleet.histories.shape[1] - 1 - i), minutes=c)
+            values = dict(zip(fleet.names, fleet.histories[c, i].tolist(), strict=True))
+            record_measurements(session, car, at, values, source="api")
+    response = client.post("/api/v1/maintenance/forecasts", headers=ADMIN)
+    assert response.status_code == 201, response.text
+    return LINE_CARS
+
+
+def test_generated_fleet_ranks_drifting_cars_first(client: TestClient, session: Session) -> None:
+    """The demo's path: bench ``measurement`` events through the API, then the fleet ranking."""
+    keys = build_line(client)
+    for car in FLEET:
+        post_ok(client, "/api/v1/cars", {"id": car})
+    load_fleet_history(client, ADMIN, keys["D-bench"], FLEET, end=END)
+    response = client.get("/api/v1/maintenance/fleet", headers=ADMIN)
+    assert response.status_code == 200
+    loaded = response.json()
+    truth = demo_fleet(len(FLEET))
+    leaving = {car for car, out in zip(FLEET, truth.leaves_within_horizon, strict=True) if out}
+    assert len(leaving) == 3
+    ranked = [c for c in loaded["cars"] if c["car"] in FLEET]
+    assert [c["rank"] for c in ranked] == sorted(c["rank"] for c in ranked)
+    top = {c["car"] for c in ranked[: len(leaving)]}
+    assert top == leaving, [(c["car"], c["risk"]) for c in ranked[:6]]
+    for car in ranked[: len(leaving)]:
+        assert car["risk"] >= 0.5 and car["recommendation"] == "plan_withdrawal"
+        assert set(car["weights"]) == set(truth.names) and car["contributions"]
+    never = {car for car, d in zip(FLEET, truth.degrading, strict=True) if not d}
+    assert all(c["risk"] < 0.5 for c in ranked if c["car"] in never)
+    # the cars of the line without measurements come last, without a risk
+    assert [c["status"] for c in loaded["cars"][-4:]] == ["not_enough_history"] * 4
+    stored = session.scalars(select(Measurement).where(Measurement.car_id == FLEET[0])).all()
+    assert len(stored) == 100 * len(truth.names)
+    assert {m.source for m in stored} == {"event"} and all(m.raw_event_id for m in stored)
+
+
+def test_car_forecast_has_history_interval_band_and_reasons(
+    stored: list[str], client: TestClient
+) -> None:
+    car = stored[0]
+    body = client.get(f"/api/v1/cars/{car}/forecast", headers=ADMIN).json()
+    assert body["status"] == "ok" and body["n_measurements"] == 100
+    assert len(body["index_history"]) == 100
+    assert body["index_history"][-1]["at"].startswith("2026-11-23")
+    steps = body["forecast"]["steps"]
+    assert len(steps) == 30 and all(s["lower"] <= s["value"] <= s["upper"] for s in steps)
+    assert datetime.fromisoformat(steps[0]["at"]) - datetime.fromisoformat(
+        body["index_history"][-1]["at"]
+    ) == timedelta(days=2)
+    lo, hi = body["index_band"]
+    assert lo < 1.0 < hi
+    assert "fleet prediction weights" in body["calibration"]
+    assert body["reasons"] and "index" in body["reasons"][0]
+    assert set(body["bands"]["brake_cylinder_fill_s"]) == {"lower", "upper", "unit"}
+    assert body["bands"]["brake_cylinder_fill_s"]["lower"] == pytest.approx(2.4)
+    # contributions add up to the index deviation now (the package's identity)
+    now = body["index_history"][-1]["index"]
+    assert sum(body["contributions"].values()) == pytest.approx(now - 1.0, abs=1e-9)
+    assert body["override"] is None and body["overrides"] == []
+
+
+def test_forecasts_are_appended_and_the_latest_counts(
+    stored: list[str], client: TestClient, session: Session
+) -> None:
+    car = stored[0]
+    first = client.get(f"/api/v1/cars/{car}/forecast", headers=ADMIN).json()
+    response = client.post(
+        "/api/v1/maintenance/forecasts", json={"method": "inverse_variance"}, headers=ADMIN
+    )
+    assert response.status_code == 201, response.text
+    assert response.json()["cars"] == len(stored)
+    again = client.get(f"/api/v1/cars/{car}/forecast", headers=ADMIN).json()
+    assert again["forecast_id"] > first["forecast_id"] and again["method"] == "inverse_variance"
+    rows = session.scalars(select(Forecast).where(Forecast.car_id == car)).all()
+    assert len(rows) == 2
+
+
+def test_chart_is_a_png(stored: list[str], client: TestClient) -> None:
+    response = client.get(f"/api/v1/cars/{stored[0]}/forecast.png", headers=ADMIN)
+    assert response.status_code == 200
+    assert response.headers["content-type"] == "image/png"
+    assert response.content[:8] == b"\x89PNG\r\n\x1a\n"
+    import cv2
+
+    image = cv2.imdecode(np.frombuffer(response.content, np.uint8), cv2.IMREAD_COLOR)
+    assert image.shape[:2] == (300, 760)
+
+
+def test_pivot_carries_skipped_values_and_drops_rare_parameters() -> None:
+    t = [datetime(2026, 1, d, tzinfo=UTC) for d in range(1, 6)]
+    rows = [(t[0], "a", 1.0), (t[0], "b", 5.0), (t[1], "a", 2.0), (t[2], "a", 3.0)]
+    rows += [(t[2], "b", 6.0), (t[3], "b", 7.0), (t[4], "a", 4.0), (t[4], "a", 4.5)]
+    rows += [(t[4], "c", 9.0)]
+    history = pivot("0117", rows, ["a", "b", "c"])
+    assert history.names == ("a", "b")  # c measured once in five tests
+    assert history.taken_at == t
+    np.testing.assert_allclose(
+        history.values, [[1, 5], [2, 5], [3, 6], [3, 7], [4.5, 7]]
+    )  # skipped values carried forward; a repeated measurement keeps the later value

@@ -1,0 +1,120 @@
+"""Snapshot uploads: accepted formats, and every way a file can be bad."""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session
+
+from ingest.models import RawEvent
+from tests.service.linekit import build_line
+
+
+def encoded(ext: str, *, width: int = 320, height: int = 240) -> bytes:
+    image = np.full((height, width, 3), (60, 70, 80), np.uint8)
+    cv2.circle(image, (width // 2, height // 2), height // 10, (0, 0, 220), -1)
+    ok, data = cv2.imencode(ext, image)
+    assert ok
+    return data.tobytes()
+
+
+def png_header_only(width: int, height: int) -> bytes:
+    """A PNG whose header claims a huge image while the file stays tiny (a decompression bomb)."""
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return (
+            struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+        )
+
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", ihdr)
+        + chunk(b"IDAT", zlib.compress(b"\0" * 64))
+        + chunk(b"IEND", b"")
+    )
+
+
+def upload(
+    client: TestClient,
+    headers: dict[str, str],
+    data: bytes,
+    *,
+    event_id: str = "s1",
+    name: str = "tail.jpg",
+    content_type: str = "image/jpeg",
+) -> object:
+    form = {"event_id": event_id, "occurred_at": "2026-11-23T10:41:00Z", "section": "AB"}
+    return client.post(
+        "/api/v1/snapshots", data=form, files={"image": (name, data, content_type)}, headers=headers
+    )
+
+
+@pytest.mark.parametrize(("ext", "mime"), [(".jpg", "image/jpeg"), (".png", "image/png")])
+def test_jpeg_and_png_accepted_and_served(
+    client: TestClient, data_dir: Path, ext: str, mime: str
+) -> None:
+    keys = build_line(client)
+    data = encoded(ext)
+    response = upload(client, keys["B-cam"], data, content_type=mime)
+    assert response.status_code == 201, response.text
+    body = response.json()
+    assert body["verdict"] in ("present", "absent", "uncertain") and 0.0 <= body["score"] <= 1.0
+    retry = upload(client, keys["B-cam"], data, content_type=mime)
+    assert retry.status_code == 200 and retry.json() == body
+    from tests.conftest import ADMIN
+
+    image = client.get(f"/api/v1/snapshots/{body['snapshot']}", headers=ADMIN)
+    assert (
+        image.status_code == 200 and image.content == data and image.headers["content-type"] == mime
+    )
+    overlay = client.get(f"/api/v1/snapshots/{body['snapshot']}/overlay", headers=ADMIN)
+    assert overlay.status_code == 200 and overlay.content.startswith(b"\x89PNG")
+    assert list(data_dir.glob(f"images/*/*{ext}")), "image stored content-addressed"
+
+
+def test_same_event_id_other_image_conflicts(client: TestClient) -> None:
+    keys = build_line(client)
+    assert upload(client, keys["B-cam"], encoded(".jpg")).status_code == 201
+    assert upload(client, keys["B-cam"], encoded(".jpg", width=330)).status_code == 409
+
+
+@pytest.mark.parametrize(
+    ("data", "status"),
+    [
+        (b"", 422),
+        (b"hello, this is not an image\n" * 10, 422),
+        (encoded(".jpg")[:-2000], 422),
+        (png_header_only(50_000, 50_000), 413),
+        (encoded(".bmp"), 422),
+    ],
+    ids=["empty", "text", "truncated-jpeg", "png-bomb-header", "bmp"],
+)
+def test_bad_files_rejected_without_side_effect(
+    client: TestClient, session: Session, data: bytes, status: int
+) -> None:
+    keys = build_line(client)
+    response = upload(client, keys["B-cam"], data)
+    assert response.status_code == status, response.text
+    assert response.headers["content-type"] == "application/problem+json"
+    assert session.scalar(select(func.count()).select_from(RawEvent)) == 0
+
+
+def test_only_cameras_upload_and_fields_required(client: TestClient) -> None:
+    keys = build_line(client)
+    assert upload(client, keys["B-ac"], encoded(".jpg")).status_code == 403
+    response = client.post(
+        "/api/v1/snapshots",
+        data={"event_id": "s9"},
+        files={"image": ("a.jpg", encoded(".jpg"), "image/jpeg")},
+        headers=keys["B-cam"],
+    )
+    assert response.status_code == 422
+    assert {"occurred_at", "section"} <= {e["loc"][-1] for e in response.json()["errors"]}
