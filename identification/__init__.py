@@ -1,0 +1,67 @@
+"""Car identification: which cars passed each reader, in which order (spec: identification.md).
+
+Pure algorithms (numpy and the standard library only). Decoders accept exactly the payload
+fields of the protocol's device events; simulators (``identification.simulate``) produce such
+payloads and are kept apart from the decoders.
+
+Wheel marks — ``identification.wheel_marks`` (events ``wheel_marks``, ``wheel_marks_written``)
+    ``simulate_marking(detections, *, axles=4) -> MarkingResult``
+        ``.state`` ("marked" / "partial" / "lost"), ``.written`` (bool per axle), ``.faults``.
+        Feed it a ``wheel_marks_written`` event's ``detections``.
+    ``ReadingSection(*, axles=4, baseline_length=8)``
+        ``.sample(code)``, ``.edge(sensor, value=None) -> WheelReading | None``, ``.feed(edges)``;
+        ``WheelReading.as_event()`` gives a ``wheel_marks`` payload.
+    ``smooth_baseline(samples) -> float``
+        ``a0`` of the last five samples, ``(-3, 12, 17, 12, -3) / 35``.
+    ``decode_passage(baseline, axles, *, direction, bits_per_axle=None, layout="duplicate")``
+        ``-> WheelDecode`` with ``.code`` (int or None), ``.reason``, ``.readable_axles``,
+        ``.margin``. ``bits_per_axle`` defaults to the zones per axle of the payload. The
+        protocol's example event (direction 1, eight zones per axle) decodes to code 178
+        (0b10110010) on all four axles, margin ≈ 0.97.
+
+Infrared time-pulse — ``identification.time_pulse`` (event ``ir_pulses``)
+    ``decode_passage(reply_times_us, *, query_period_us, reflection_window_us,
+    query_times_us=None) -> TimePulseDecode`` with ``.car_number`` (int or None), ``.reads``,
+    ``.reason``. The protocol's example event decodes to reads [118, 118] → car 118.
+    ``detection_probabilities(*, amplitude, threshold, noise_density, pulse_width, gain=1.0)``
+    ``-> Detection(p_detect, p_false)``.
+    ``plan_reader(*, speed_kmh, query_period_us, zone_length_m=None, range_m=None,
+    beam_angle_deg=None, reads_required=3, car_number=None, baud=None) -> ReaderPlan``.
+
+Manchester-II — ``identification.manchester`` (event ``ir_manchester``)
+    ``encode_frame(car_number, *, convention="ieee") -> list[int]`` (one level per half-bit).
+    ``decode_passage(samples, *, samples_per_bit, convention="ieee") -> ManchesterDecode``
+    with ``.car_number``, ``.frames_ok``, ``.frames_bad``, ``.reason``. The protocol's
+    16-sample example holds two bits and no frame: car_number None, "no frame found".
+    Clock recovery and bit decoding live in ``identification.biphase.recover_bits``;
+    ``identification.em4100.decode_trace(signal)`` reuses them on real EM4100 RFID recordings.
+
+Consists — ``identification.consist`` (event ``ir_id`` and the run's evidence)
+    ``majority_number(reads: Sequence[int]) -> int | None``
+        Strict majority of repeated IR reads (``ir_id`` events), else None.
+    ``assemble_consist(reads, *, wheel_codes, ir_numbers, direction=None) -> Consist``
+        ``reads``: ``CarRead(wheel_code, ir_number)`` per car in passing order (pair two
+        readers' lists with ``combine_reads``); ``wheel_codes`` / ``ir_numbers`` map the
+        registry's codes to car ids. Unregistered reads stay as unknown positions; a
+        wheel/IR disagreement is a ``conflict`` entry. ``Consist.car_ids`` → list of id/None.
+    ``compare_consists(departure, arrival) -> ConsistComparison``
+        ``.status`` "identical" / "missing" / "unknown", ``.missing`` [(position, car id)],
+        ``.unknown_positions``, ``.aligned`` [(departure car, arrival car, mark)] with mark
+        "same" / "missing" / "unknown" / "extra", ``.reason`` (e.g. "arrival consist lacks
+        cars 0412, 0413 (positions 11–12)").
+    ``axle_sum(cars, axles_per_car, *, default_axles=None) -> int | None`` and
+    ``compare_axles(departure, arrival) -> AxleComparison`` ("equal"/"fewer"/"more"/"unknown").
+
+Simulators — ``identification.simulate`` (tests, benchmark, demo)
+    ``ir_pulses_passage(car_number, *, speed_kmh, rng, ...)`` → ``{"query_period_us",
+    "reflection_window_us", "reply_times_us"}``;
+    ``manchester_passage(car_number, *, samples_per_bit=8, rng, ...)`` →
+    ``{"samples_per_bit", "samples"}``;
+    ``wheel_mark_passage(code, *, direction, rng, ...)`` → ``{"direction", "baseline",
+    "axles"}``; ``reading_edges(passage, ...)`` and ``marking_detections(head_positions_m)``
+    for the reading and marking sections.
+"""
+
+from identification import consist, manchester, simulate, time_pulse, wheel_marks
+
+__all__ = ["consist", "manchester", "simulate", "time_pulse", "wheel_marks"]
