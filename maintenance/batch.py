@@ -1,0 +1,239 @@
+"""Vectorized fleet assessment: the same results as :func:`assess_car`, many cars at once.
+
+The scheduled forecast job assesses thousands of cars with shared fleet
+weights. With equal-length histories the trend design matrix, its inverse
+and the trend variance are the same for every car, and the Levinson–Durbin,
+ψ-weight and AR recursions run over all cars as array operations, so the
+per-car cost is mostly building the result objects.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from scipy.special import ndtr, ndtri
+
+from maintenance._checks import FloatArray, as_vector, check_band, check_positive_int
+from maintenance.bands import INDICATOR_BAND, parameter_bands, to_indicators
+from maintenance.calibration import quality_index
+from maintenance.fleet import CarAssessment, _reasons, assess_car
+from maintenance.forecasting import (
+    _MIN_UNIT_ROOT_GAP,
+    _TREND_DEGREE,
+    Forecast,
+    Trend,
+    minimum_history,
+)
+
+
+def _levinson_batch(r: FloatArray, order: int) -> tuple[FloatArray, FloatArray]:
+    """Levinson–Durbin over rows of ``r`` (n, order + 1); zero AR for ``r0 = 0``."""
+    n = r.shape[0]
+    a = np.zeros((n, order))
+    err = r[:, 0].copy()
+    live = err > 0.0
+    for m in range(order):
+        acc = r[:, m + 1] - np.einsum("ij,ij->i", a[:, :m], r[:, m:0:-1])
+        k = np.where(live & (err > 0.0), acc / np.where(err > 0.0, err, 1.0), 0.0)
+        a[:, :m] = a[:, :m] - k[:, None] * a[:, :m][:, ::-1]
+        a[:, m] = k
+        err = err * (1.0 - k * k)
+    return a, np.where(live, err, 0.0)
+
+
+def _ar_batch(resid: FloatArray, order: int) -> tuple[FloatArray, FloatArray]:
+    """Yule–Walker (biased, demeaned) per row; constant rows get ``a = 0, σ² = 0``."""
+    centred = resid - resid.mean(axis=1, keepdims=True)
+    n = centred.shape[1]
+    r = np.stack(
+        [np.einsum("ij,ij->i", centred[:, k:], centred[:, : n - k]) / n for k in range(order + 1)],
+        axis=1,
+    )
+    scale = np.maximum(1.0, np.abs(resid).max(axis=1))
+    flat = np.ptp(resid, axis=1) <= 1e-12 * scale
+    r[flat] = 0.0
+    return _levinson_batch(r, order)
+
+
+def _paths(resid: FloatArray, a: FloatArray, horizon: int) -> tuple[FloatArray, FloatArray]:
+    """AR continuation and ψ-weights, both (n_cars, horizon)."""
+    n, p = a.shape
+    buf = np.concatenate([resid[:, -p:], np.zeros((n, horizon))], axis=1)
+    psi = np.zeros((n, horizon + p))
+    psi[:, p] = 1.0
+    for h in range(horizon):
+        buf[:, p + h] = np.einsum("ij,ij->i", a, buf[:, h : p + h][:, ::-1])
+        if h:
+            psi[:, p + h] = np.einsum("ij,ij->i", a, psi[:, h : p + h][:, ::-1])
+    return buf[:, p:], psi[:, p:]
+
+
+def _forecast_batch(
+    y: FloatArray, order: int, horizon: int, trend: Trend
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Mean, std, AR coefficients, noise variance, slope for each row of ``y``."""
+    degree = _TREND_DEGREE[trend]
+    n = y.shape[1]
+    ahead = np.arange(1, horizon + 1, dtype=np.float64)
+    if degree > 0:
+        steps = np.arange(n, dtype=np.float64) - (n - 1)
+        design = np.column_stack([steps**d for d in range(degree + 1)])
+        cov = np.linalg.inv(design.T @ design)
+        coef = y @ (design @ cov)  # least squares for every car at once
+        resid = y - coef @ design.T
+        future = np.column_stack([ahead**d for d in range(degree + 1)])
+        base = coef @ future.T
+        slope = coef[:, 1]
+    else:
+        mean = y.mean(axis=1, keepdims=True)
+        resid = y - mean
+        base = np.repeat(mean, horizon, axis=1)
+        slope = np.zeros(y.shape[0])
+    a, sigma2 = _ar_batch(resid, order)
+    path, psi = _paths(resid, a, horizon)
+    var = sigma2[:, None] * np.cumsum(psi**2, axis=1)
+    if degree > 0:
+        gap = np.maximum(np.abs(1.0 - a.sum(axis=1)), _MIN_UNIT_ROOT_GAP)
+        spread = np.einsum("ij,jk,ik->i", future, cov, future)
+        var = var + (sigma2 / gap**2)[:, None] * spread[None, :]
+    return base + path, np.sqrt(var), a, sigma2, slope
+
+
+def _parameter_exit_batch(ind: FloatArray, horizon: int) -> FloatArray:
+    """Per car and parameter, P(out of [0, 2] at the horizon) from each linear trend."""
+    n = ind.shape[1]
+    steps = np.arange(n, dtype=np.float64) - (n - 1)
+    design = np.column_stack([np.ones(n), steps])
+    solve = np.linalg.pinv(design)
+    coef = np.einsum("kt,ctm->ckm", solve, ind)
+    resid = ind - np.einsum("tk,ckm->ctm", design, coef)
+    sd = np.sqrt(np.maximum(resid.var(axis=1, ddof=2), 1e-12))
+    at = coef[:, 0] + coef[:, 1] * horizon
+    lo, hi = INDICATOR_BAND
+    return np.asarray(np.clip(ndtr((lo - at) / sd) + ndtr((at - hi) / sd), 0, 1))
+
+
+def _at_least_k_batch(p: FloatArray, k: int) -> FloatArray:
+    dist = np.zeros((p.shape[0], p.shape[1] + 1))
+    dist[:, 0] = 1.0
+    for j in range(p.shape[1]):
+        q = p[:, j : j + 1]
+        dist[:, 1:] = dist[:, 1:] * (1.0 - q) + dist[:, :-1] * q
+        dist[:, 0] *= 1.0 - q[:, 0]
+    return np.asarray(np.clip(dist[:, k:].sum(axis=1), 0.0, 1.0))
+
+
+def assess_fleet(
+    histories: Any,
+    *,
+    times: Any,
+    band: Any,
+    weights: Any,
+    index_band: tuple[float, float] = INDICATOR_BAND,
+    order: int = 2,
+    horizon: int = 30,
+    window: int | None = 40,
+    trend: Trend = "linear",
+    level: float = 0.95,
+    k: int = 1,
+    names: Sequence[str] | None = None,
+    car_ids: Sequence[str] | None = None,
+) -> list[CarAssessment]:
+    """Assess many cars with shared fleet weights; equals :func:`assess_car` per car.
+
+    Parameters
+    ----------
+    histories : array_like, shape (n_cars, n_times, n_params)
+        Equal-length measurement histories (parameter units), rows in time order.
+    times : array_like, shape (n_times,)
+        Common measurement times (strictly increasing).
+    weights : array_like, shape (n_params,)
+        Fleet weights on the indicators (e.g. ``calibrate_fleet(...).weights``).
+    band, index_band, order, horizon, window, trend, level, k, names
+        As in :func:`maintenance.fleet.assess_car`.
+    car_ids : sequence of str, optional
+        One id per car.
+
+    Returns
+    -------
+    list of CarAssessment, in input order (rank them with ``rank_fleet``).
+    """
+    data = np.asarray(histories, dtype=np.float64)
+    if data.ndim != 3 or data.shape[0] < 1:
+        raise ValueError(f"histories must be 3-D (n_cars, n_times, n_params), got {data.shape}")
+    ids: list[str | None] = [None] * data.shape[0] if car_ids is None else [str(c) for c in car_ids]
+    if len(ids) != data.shape[0]:
+        raise ValueError(f"car_ids has {len(ids)} entries for {data.shape[0]} cars")
+    if trend not in _TREND_DEGREE:
+        raise ValueError(f"trend must be 'none', 'linear' or 'quadratic', got {trend!r}")
+    p, steps = check_positive_int(order, "order"), check_positive_int(horizon, "horizon")
+    need = max(minimum_history(p, trend), p + 3)
+    if data.shape[1] < need or not np.all(np.isfinite(data)):
+        # rare paths (short or broken histories) keep the per-car messages
+        return [
+            assess_car(h, times=times, band=band, weights=weights, index_band=index_band,
+                       order=p, horizon=steps, window=window, trend=trend,
+                       level=level, k=k, names=names, car_id=c)
+            for h, c in zip(data, ids, strict=True)
+        ]  # fmt: skip
+    t = as_vector(times, "times")
+    if t.shape[0] != data.shape[1] or np.any(np.diff(t) <= 0.0):
+        raise ValueError("times must be strictly increasing, one per history row")
+    w = as_vector(weights, "weights")
+    if w.shape[0] != data.shape[2]:
+        raise ValueError(f"weights has {w.shape[0]} values for {data.shape[2]} parameters")
+    ib = check_band(index_band, "index_band")
+    if not 0.0 < float(level) < 1.0:
+        raise ValueError(f"level must be in (0, 1), got {level!r}")
+    labels = tuple(str(x) for x in (names or [f"p{i}" for i in range(data.shape[2])]))
+    if len(labels) != data.shape[2]:
+        raise ValueError(f"names has {len(labels)} entries for {data.shape[2]} parameters")
+    ind = to_indicators(data, parameter_bands(band, data.shape[2]))
+    y = quality_index(ind, w)
+    recent = slice(-window, None) if window is not None else slice(None)
+    mean, std, a, sigma2, slope = _forecast_batch(y[:, recent], p, steps, trend)
+    lo, hi = ib
+    outside = (mean < lo) | (mean > hi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        prob = np.where(std > 0.0, ndtr((lo - mean) / std) + ndtr((mean - hi) / std), outside * 1.0)
+    prob = np.clip(prob, 0.0, 1.0)
+    z = float(ndtri(0.5 + float(level) / 2.0))
+    p_out = _parameter_exit_batch(ind[:, recent], steps)
+    kk = min(check_positive_int(k, "k"), data.shape[2])
+    k_of_l = _at_least_k_batch(p_out, kk)
+    dt = float(np.median(np.diff(t))) if t.shape[0] > 1 else 1.0
+    ahead = t[-1] + dt * np.arange(1, steps + 1)
+    contrib = w * (ind[:, -1] - 1.0)
+    out = []
+    for c in range(data.shape[0]):
+        exits = np.flatnonzero(outside[c])
+        fc = Forecast(
+            values=mean[c], lower=mean[c] - z * std[c], upper=mean[c] + z * std[c], std=std[c],
+            exit_probability=prob[c], first_exit=int(exits[0]) + 1 if exits.size else None,
+            risk=float(prob[c].max()), coefficients=a[c], noise_variance=float(sigma2[c]),
+            slope=float(slope[c]), band=ib, level=float(level),
+        )  # fmt: skip
+        out.append(
+            CarAssessment(
+                status="ok",
+                car_id=ids[c],
+                method="given",
+                n_measurements=int(data.shape[1]),
+                names=labels,
+                times=t,
+                index=y[c],
+                weights=w,
+                contributions=contrib[c],
+                index_band=ib,
+                forecast=fc,
+                forecast_times=ahead,
+                first_exit=fc.first_exit,
+                risk=fc.risk,
+                parameter_exit_probability=p_out[c],
+                k_of_l_probability=float(k_of_l[c]),
+                reasons=_reasons(labels, ind[c, -1], contrib[c], fc, ib, steps, ahead),
+            )  # fmt: skip
+        )
+    return out
