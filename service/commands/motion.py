@@ -1,0 +1,498 @@
+"""CLI commands of the motion package: ``optical-speed``, ``braking`` and
+``motion-tables``.
+
+The top-level ``depot`` CLI adds them with :func:`register`::
+
+    sub = parser.add_subparsers(dest="command")
+    service.commands.motion.register(sub)
+    args = parser.parse_args(argv)
+    return args.func(args)          # each command returns an exit code
+
+They also run alone: ``python -m service.commands.motion motion-tables``.
+
+Commands
+--------
+``depot optical-speed IMAGE --distance M --pixel-fov RAD --row-time S [--rows N] [--json]``
+    Speed from the slant of vertical stripes on a rolling-shutter image
+    (eq. 14) and its uncertainty (eq. 15).
+``depot braking trials --p-max P --beta B``
+    Trials needed to claim P at confidence B (eq. 8).
+``depot braking exceedance --p-max P -k K [--channels C]``
+    Exceedance of the smallest of K measurements in each of C channels.
+``depot braking plan --speed V --decel A [--reaction-time S] [--gradient ‰] [...]``
+    Braking distance, protective section and braking start point (eq. 6–7).
+``depot braking montecarlo [--runs N] [--control deceleration|speed] [--png FILE]``
+    Monte Carlo of the braking-distance error with ±10 % speed error (eq. 9),
+    the empirical bound, and a histogram PNG (matplotlib, Agg).
+``depot motion-tables [--json]``
+    Table 1 of both papers and the 40 km/h example as computed, beside the
+    printed values.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+from motion import braking, optical
+
+__all__ = ["build_parser", "main", "register", "render_histogram_png"]
+
+
+def _print_json(obj: Any) -> None:
+    print(json.dumps(obj, indent=2, ensure_ascii=False, allow_nan=False, default=_nan_safe))
+
+
+def _nan_safe(o: Any) -> Any:
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def _clean(obj: Any) -> Any:
+    """Replace NaN/inf by None so that the output is strict JSON."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_clean(v) for v in obj]
+    return obj
+
+
+def _err(msg: str) -> int:
+    print(f"error: {msg}", file=sys.stderr)
+    return 2
+
+
+# ------------------------------------------------------------------ optical-speed
+def _cmd_optical_speed(args: argparse.Namespace) -> int:
+    import cv2
+
+    path = Path(args.image)
+    if not path.is_file():
+        return _err(f"no such image: {path} (give the path of a PNG or JPEG frame)")
+    img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+    if img is None:
+        return _err(f"cannot read image: {path} (expected a PNG or JPEG file)")
+    try:
+        r = optical.speed_from_image(
+            img,
+            distance_m=args.distance,
+            pixel_fov_rad=args.pixel_fov,
+            row_time_s=args.row_time,
+            rows=args.rows,
+            pixel_error_rad=args.pixel_error,
+        )
+    except ValueError as e:
+        return _err(f"{e} (the image must show bright vertical stripes; check --pixel-fov)")
+    if args.json:
+        _print_json(_clean({"image": str(path), **r.as_dict()}))
+    else:
+        print(
+            f"speed {r.speed_kmh:.2f} km/h ({r.speed_mps:.3f} m/s) "
+            f"± {r.sigma_kmh:.2f} km/h (eq. 15); "
+            f"smear {r.smear_px:.1f} px over {r.rows} rows; {r.tracks} stripe edges; "
+            f"direction {r.direction:+d}"
+        )
+    return 0
+
+
+# ------------------------------------------------------------------ braking
+def _cmd_trials(args: argparse.Namespace) -> int:
+    try:
+        n = braking.trials_needed(args.p_max, args.beta)
+    except ValueError as e:
+        return _err(str(e))
+    printed = braking.PAPER_TABLE1.get((args.p_max, args.beta))
+    out = {"p_max": args.p_max, "beta": args.beta, "trials": n, "paper_printed": printed}
+    if args.json:
+        _print_json(out)
+    else:
+        note = "" if printed is None or printed == n else f"  (the paper prints {printed})"
+        print(
+            f"{n} trials without exceedance claim p ≤ {args.p_max:g} "
+            f"at confidence {args.beta:g}{note}"
+        )
+    return 0
+
+
+def _cmd_exceedance(args: argparse.Namespace) -> int:
+    try:
+        p = braking.exceedance(args.p_max, args.k, args.channels)
+        k_sil4 = braking.measurements_needed(args.p_max, braking.SIL4, args.channels)
+    except ValueError as e:
+        return _err(str(e))
+    out = {
+        "p_max": args.p_max,
+        "k": args.k,
+        "channels": args.channels,
+        "exceedance": p,
+        "meets_sil4": p <= braking.SIL4 * (1 + 1e-9),
+        "k_for_sil4": k_sil4,
+    }
+    if args.json:
+        _print_json(out)
+    else:
+        print(
+            f"smallest of {args.k} measurement(s) in each of {args.channels} channel(s): "
+            f"exceedance {p:.3g}; SIL-4 (1e-8) needs k = {k_sil4} per channel"
+        )
+    return 0
+
+
+def _speed_arg(args: argparse.Namespace) -> float:
+    if args.speed_kmh is not None:
+        return float(args.speed_kmh) / 3.6
+    return float(args.speed)
+
+
+def _cmd_plan(args: argparse.Namespace) -> int:
+    em = braking.ErrorModel(
+        delta_s_max_m=args.delta_s_max,
+        p_s=args.p_s,
+        delta_l_max_m=args.delta_l_max,
+        p_l=args.p_l,
+        measurements=args.k,
+        channels=args.channels,
+        measurement_time_s=args.measurement_time,
+    )
+    try:
+        plan = braking.braking_plan(
+            _speed_arg(args),
+            args.decel,
+            reaction_time_s=args.reaction_time,
+            gradient_permille=args.gradient,
+            errors=em,
+            obstacle_at_m=args.obstacle_at,
+        )
+    except ValueError as e:
+        return _err(str(e))
+    if args.json:
+        _print_json(_clean(plan.as_dict()))
+    else:
+        print(
+            f"braking distance      {plan.braking_distance_m:9.1f} m  "
+            f"(reaction {plan.reaction_distance_m:.1f} m)"
+        )
+        print(f"ΔS_max                {plan.delta_s_max_m:9.1f} m")
+        print(f"ΔL_max (+ run during k measurements) {plan.delta_l_max_m:.1f} m")
+        print(f"protective section    {plan.protective_section_m:9.1f} m")
+        print(f"brake when measured distance ≤ {plan.brake_at_measured_distance_m:.1f} m")
+        if plan.brake_start_coordinate_m is not None:
+            print(
+                f"braking start point   {plan.brake_start_coordinate_m:9.1f} m (track coordinate)"
+            )
+        print(
+            f"collision probability < {plan.collision_probability_bound:.3g} "
+            f"({'meets' if plan.meets_sil4 else 'does not meet'} SIL-4 1e-8)"
+        )
+    return 0
+
+
+def render_histogram_png(result: braking.MonteCarloResult, path: str | Path) -> Path:
+    """Histogram of relative frequencies of the braking-distance error (PNG,
+    matplotlib Agg), with the Pearson type I fit and the empirical bound."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    out = Path(path)
+    edges = np.asarray(result.edges_m)
+    counts = np.asarray(result.counts, dtype=float)
+    width = np.diff(edges)
+    fig, ax = plt.subplots(figsize=(7, 4.2), dpi=110)
+    ax.bar(
+        edges[:-1],
+        counts / result.runs,
+        width=width,
+        align="edge",
+        edgecolor="black",
+        alpha=0.7,
+        label=f"{result.runs} runs",
+    )
+    if result.fit is not None:
+        x = np.linspace(edges[0], edges[-1], 400)
+        ax.plot(
+            x,
+            result.fit.pdf(x) * float(np.mean(width)),
+            "r-",
+            label=f"Pearson I fit (χ² p = {result.fit.p_value:.2f})",
+        )
+    ax.axvline(
+        -result.delta_s_max_m,
+        color="k",
+        ls="--",
+        label=f"ΔS_max = {result.delta_s_max_m:.2f} m "
+        f"(p ≤ {result.p_exceed:.1e}, β = {result.beta:g})",
+    )
+    ax.set_xlabel("braking-distance error ΔS = S_nominal − S_actual, m")
+    ax.set_ylabel("relative frequency")
+    ax.set_title(
+        f"Target braking by {result.control}, V = {result.speed_mps * 3.6:.0f} km/h, ΔV = ±10 %"
+    )
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, format="png")
+    plt.close(fig)
+    return out
+
+
+def _cmd_montecarlo(args: argparse.Namespace) -> int:
+    try:
+        r = braking.braking_error_monte_carlo(
+            args.runs,
+            control=args.control,
+            speed_mps=_speed_arg(args),
+            beta=args.beta,
+            seed=args.seed,
+        )
+    except ValueError as e:
+        return _err(str(e))
+    png = render_histogram_png(r, args.png) if args.png else None
+    d = r.as_dict()
+    d["png"] = None if png is None else str(png)
+    if args.json:
+        _print_json(_clean(d))
+    else:
+        print(
+            f"{r.runs} runs, braking by {r.control}, "
+            f"nominal braking distance {r.nominal_distance_m:.1f} m"
+        )
+        print(
+            f"error range {r.min_m:.2f} … {r.max_m:.2f} m, "
+            f"mean {r.mean_m:.2f} m, sd {r.std_m:.2f} m"
+        )
+        print(
+            f"empirical bound ΔS_max = {r.delta_s_max_m:.2f} m, exceeded with p ≤ {r.p_exceed:.2e} "
+            f"at confidence {r.beta:g}"
+        )
+        print(
+            "trials needed at this confidence: "
+            + ", ".join(f"p {k}: {v}" for k, v in r.trials_for.items())
+        )
+        if r.fit is not None:
+            print(
+                f"Pearson type I fit: α={r.fit.alpha:.2f} β={r.fit.beta:.2f} on "
+                f"[{r.fit.lower:.2f}, {r.fit.upper:.2f}] m, χ²={r.fit.chi2:.2f} (dof {r.fit.dof}, "
+                f"p={r.fit.p_value:.2f})"
+            )
+        else:
+            print("no Pearson type I fit: the sample moments are outside the type I region")
+        if png is not None:
+            print(f"histogram written to {png}")
+    return 0
+
+
+# ------------------------------------------------------------------ motion-tables
+def tables() -> dict[str, Any]:
+    """Both papers' tables as the service computes them, with the printed values."""
+    t000 = []
+    for row in optical.table1():
+        printed = optical.PAPER_TABLE1.get(row.meter)
+        t000.append(
+            {
+                **row.as_dict(),
+                "printed": None
+                if printed is None
+                else dict(
+                    zip(
+                        ["d1_m", "sigma_d1_m", "d2_m", "sigma_d2_m", "sigma_v_mps", "sigma_v_kmh"],
+                        printed,
+                        strict=True,
+                    )
+                ),
+            }
+        )
+    ex = optical.PAPER_EXAMPLE
+    geom = {
+        "distance_m": ex["distance_m"],
+        "pixel_fov_rad": ex["pixel_fov_rad"],
+        "rows": ex["rows"],
+        "row_time_s": ex["row_time_s"],
+    }
+    smear = optical.smear_for_speed(ex["speed_kmh"] / 3.6, **geom)
+    study = optical.roll_scatter_study()
+    t001 = [
+        {
+            "p_max": c.p_max,
+            "beta": c.beta,
+            "computed": c.computed,
+            "printed": c.printed,
+            "matches": c.matches,
+        }
+        for c in braking.table1()
+    ]
+    return {
+        "000_table1": t000,
+        "000_example_40kmh": {
+            "rows": optical.rows_for_stripe(1.0, ex["distance_m"], ex["pixel_fov_rad"]),
+            "smear_px": smear,
+            "smear_px_printed": ex["smear_px"],
+            "sigma15_mps": study.sigma15_mps,
+            "max_sigma16_mps": study.max_sigma_mps,
+            "max_sigma16_kmh": study.max_sigma_kmh,
+            "worst_case_sigma16_mps": study.bound_sigma_mps,
+            "bound_printed_kmh": ex["bound_kmh"],
+            "bound_printed_mps": ex["bound_mps"],
+        },
+        "001_table1": t001,
+    }
+
+
+def _cmd_tables(args: argparse.Namespace) -> int:
+    t = tables()
+    if args.json:
+        _print_json(_clean(t))
+        return 0
+    print("000 (Starovoitov & Vorobiev), Table 1 — computed [printed]")
+    print(
+        f"{'meter':18s} {'D1':>6s} {'σD1':>12s} {'D2':>6s} {'σD2':>12s} "
+        f"{'σv m/s':>14s} {'σv km/h':>14s}"
+    )
+    for r in t["000_table1"]:
+        p = r["printed"]
+
+        def cell(v: float, key: str, p: dict[str, float] | None = p) -> str:
+            return f"{v:.2f} [{p[key]:.2f}]" if p else f"{v:.3f}"
+
+        print(
+            f"{r['meter']:18s} {r['d1_m']:6.2f} {cell(r['sigma_d1_m'], 'sigma_d1_m'):>12s} "
+            f"{r['d2_m']:6.2f} {cell(r['sigma_d2_m'], 'sigma_d2_m'):>12s} "
+            f"{cell(r['sigma_v_mps'], 'sigma_v_mps'):>14s} "
+            f"{cell(r['sigma_v_kmh_paper_style'], 'sigma_v_kmh'):>14s}"
+        )
+    print("  stereo: the paper's convention (Δω in metres in eq. 4); stereo_consistent: f·Δω.")
+    print("  σv km/h as printed = rounded m/s × 3.6.")
+    e = t["000_example_40kmh"]
+    print(
+        f"40 km/h on 1 m stripes at 1 m: h = {e['rows']} rows, smear {e['smear_px']:.1f} px "
+        f"[{e['smear_px_printed']}]; eq. 15 σv {e['sigma15_mps']:.4f} m/s; eq. 16 over 45 s "
+        f"max {e['max_sigma16_mps']:.3f} m/s = {e['max_sigma16_kmh']:.3f} km/h "
+        f"[≤ {e['bound_printed_mps']} m/s, {e['bound_printed_kmh']} km/h]"
+    )
+    print()
+    print("001 (Baranov et al.), Table 1 — trials n = ⌈lg(1-β)/lg(1-p)⌉ [printed]")
+    for r in t["001_table1"]:
+        flag = "" if r["matches"] else "   ← differs from the printed table"
+        print(
+            f"  p_max {r['p_max']:.0e}  β {r['beta']:<6g} "
+            f"{r['computed']:>9d} [{r['printed']}]{flag}"
+        )
+    return 0
+
+
+# ------------------------------------------------------------------ wiring
+def register(sub: Any) -> None:
+    """Add ``optical-speed``, ``braking`` and ``motion-tables`` to an
+    ``argparse`` sub-parsers object."""
+    p = sub.add_parser(
+        "optical-speed", help="speed from a rolling-shutter image of vertical stripes"
+    )
+    p.add_argument("image", metavar="IMAGE")
+    p.add_argument(
+        "--distance", type=float, required=True, metavar="M", help="distance to the stripes, m"
+    )
+    p.add_argument(
+        "--pixel-fov", type=float, required=True, metavar="RAD", help="angle of one pixel β, rad"
+    )
+    p.add_argument(
+        "--row-time", type=float, required=True, metavar="S", help="row read-out time t_c, s"
+    )
+    p.add_argument(
+        "--rows", type=int, default=None, metavar="N", help="rows h (default: the stripe height)"
+    )
+    p.add_argument(
+        "--pixel-error", type=float, default=None, metavar="RAD", help="Δω (default β/2)"
+    )
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_cmd_optical_speed)
+
+    _register_braking(sub)
+
+    mt = sub.add_parser(
+        "motion-tables", help="both papers' tables as computed, beside the printed values"
+    )
+    mt.add_argument("--json", action="store_true")
+    mt.set_defaults(func=_cmd_tables)
+
+
+def _register_braking(sub: Any) -> None:
+    b = sub.add_parser(
+        "braking", help="braking safety: trials, exceedance, protective section, Monte Carlo"
+    )
+    bs = b.add_subparsers(dest="braking_command", required=True)
+
+    t = bs.add_parser("trials", help="trials needed for p_max at confidence β (eq. 8)")
+    t.add_argument("--p-max", type=float, required=True)
+    t.add_argument("--beta", type=float, required=True)
+    t.add_argument("--json", action="store_true")
+    t.set_defaults(func=_cmd_trials)
+
+    x = bs.add_parser(
+        "exceedance", help="exceedance of the smallest of k measurements over channels"
+    )
+    x.add_argument("--p-max", type=float, required=True)
+    x.add_argument("-k", type=int, required=True)
+    x.add_argument("--channels", type=int, default=1)
+    x.add_argument("--json", action="store_true")
+    x.set_defaults(func=_cmd_exceedance)
+
+    pl = bs.add_parser("plan", help="protective section and braking start point (eq. 6–7)")
+    sp = pl.add_mutually_exclusive_group(required=True)
+    sp.add_argument("--speed", type=float, help="m/s")
+    sp.add_argument("--speed-kmh", type=float)
+    pl.add_argument("--decel", type=float, required=True, help="braking deceleration, m/s²")
+    pl.add_argument("--reaction-time", type=float, default=0.0, help="s")
+    pl.add_argument("--gradient", type=float, default=0.0, help="‰, positive uphill")
+    pl.add_argument(
+        "--delta-s-max", type=float, default=3.0, help="largest negative braking error, m"
+    )
+    pl.add_argument("--p-s", type=float, default=1e-2)
+    pl.add_argument(
+        "--delta-l-max", type=float, default=0.0, help="largest positive range error, m"
+    )
+    pl.add_argument("--p-l", type=float, default=1e-2)
+    pl.add_argument(
+        "-k", type=int, default=1, help="measurements per channel (the smallest is used)"
+    )
+    pl.add_argument("--channels", type=int, default=1)
+    pl.add_argument("--measurement-time", type=float, default=0.0, help="s per measurement")
+    pl.add_argument("--obstacle-at", type=float, default=None, help="obstacle track coordinate, m")
+    pl.add_argument("--json", action="store_true")
+    pl.set_defaults(func=_cmd_plan)
+
+    m = bs.add_parser(
+        "montecarlo", help="Monte Carlo of the braking-distance error (±10 % speed error)"
+    )
+    m.add_argument("--runs", type=int, default=230)
+    m.add_argument("--control", choices=["deceleration", "speed"], default="deceleration")
+    ms = m.add_mutually_exclusive_group()
+    ms.add_argument("--speed", type=float, default=16.7, help="m/s")
+    ms.add_argument("--speed-kmh", type=float, default=None)
+    m.add_argument("--beta", type=float, default=0.9)
+    m.add_argument("--seed", type=int, default=0)
+    m.add_argument("--png", default=None, metavar="FILE", help="write the histogram here")
+    m.add_argument("--json", action="store_true")
+    m.set_defaults(func=_cmd_montecarlo)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="depot", description="depot motion commands")
+    register(parser.add_subparsers(dest="command", required=True))
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    rc: int = args.func(args)
+    return rc
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
