@@ -156,7 +156,7 @@ class DemoLine:
             device = f"{station}-{trip.section}"
             if f"{device}-ir" not in self.silent:
                 passage = ir_pulses_passage(
-                    int(car), speed_kmh=30.0, rng=self.rng, spurious_rate=0.01
+                    int(car), speed_kmh=5.0, rng=self.rng, spurious_rate=0.01
                 )
                 self.post(f"{device}-ir", "ir_pulses", when, section=trip.section, **passage)
             if f"{device}-wm" not in self.silent:
@@ -204,9 +204,13 @@ class DemoLine:
             train=trip.train,
         )
 
-    def decide(self, section: str, action: str, reason: str) -> None:
+    def settle(self, section: str, reason: str) -> None:
+        """A dispatcher clears a section left waiting (auxiliary mode, or a doubt looked at)."""
         current = self.client.get(f"/api/v1/sections/{section}", headers=self.admin).json()
         run = current["run"]
+        if current["state"] == "free" or run is None:
+            return
+        action = "clear"
         response = self.client.post(
             f"/api/v1/runs/{run['id']}/decision",
             json={"action": action, "reason": reason},
@@ -219,28 +223,31 @@ class DemoLine:
 
 
 def day_of_traffic(line: DemoLine, end: datetime) -> None:
+    """Six runs; the day ends with AB in alarm (lost cars) and BC in review (a silent reader)."""
     t = end - timedelta(hours=6)
     cars = FLEET
     line.run(Trip("AB", "A", "B", "2041", cars[0:8], t))
     line.run(
         Trip("AB", "B", "A", "2042", cars[8:14], t + timedelta(hours=1), arrival_condition="dusk")
     )
+    line.settle("AB", "dusk images checked by eye; consist complete")
     line.run(Trip("BC", "B", "C", "2043", cars[14:24], t + timedelta(hours=1, minutes=30)))
-    line.decide("BC", "clear", "consists and tail disc checked on the images")
+    line.settle("BC", "auxiliary mode: consists and tail disc confirmed on the images")
+    night = Trip(
+        "BC",
+        "C",
+        "B",
+        "2044",
+        cars[24:30],
+        t + timedelta(hours=2, minutes=30),
+        arrival_condition="night",
+        weak_disc=True,
+    )
+    line.run(night)
+    line.settle("BC", "night image: the dim disc is visible by eye; axle counts agree")
     line.run(Trip("AB", "A", "B", "3107", cars[24:36], t + timedelta(hours=3), lose=2))
     line.silent.add("C-BC-ir")
-    line.run(
-        Trip(
-            "BC",
-            "B",
-            "C",
-            "2045",
-            cars[0:6],
-            t + timedelta(hours=5),
-            arrival_condition="night",
-            weak_disc=True,
-        )
-    )
+    line.run(Trip("BC", "B", "C", "2045", cars[0:6], t + timedelta(hours=5)))
 
 
 def load_demo(*, force: bool = False) -> int:
@@ -260,7 +267,7 @@ def load_demo(*, force: bool = False) -> int:
         }
     print(
         f"demo: loaded {len(STATIONS)} stations, {len(line.keys)} devices,"
-        f" {len(FLEET)} cars, 5 runs;"
+        f" {len(FLEET)} cars, 6 runs;"
         f" section states {states}"
     )
     return 0

@@ -17,7 +17,7 @@ from service.setup.models import Car
 @handles("train_departed")
 def _departed(d: Derivation) -> dict[str, Any]:
     return service.open_run(
-        d.session, d.raw.id, d.event.section, d.event.train, d.event.occurred_at
+        d.session, d.raw.id, d.event.section, d.device.station, d.event.train, d.event.occurred_at
     )
 
 

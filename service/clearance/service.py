@@ -34,7 +34,7 @@ def _set_state(section: Section, state: str, at: datetime) -> None:
 
 
 def open_run(
-    session: Session, run_id: int, section_id: str, train: str, at: datetime
+    session: Session, run_id: int, section_id: str, station: str, train: str, at: datetime
 ) -> dict[str, Any]:
     """``train_departed``: the train takes the block, or a conflict is recorded and raised."""
     section = lock_section(session, section_id)
@@ -42,8 +42,9 @@ def open_run(
         id=run_id,
         section=section.id,
         train=train,
-        from_station=section.from_station,
-        to_station=section.to_station,
+        # Single track, both directions: the departing station decides the direction.
+        from_station=station,
+        to_station=section.to_station if station == section.from_station else section.from_station,
         departed_at=at,
         status="running",
         reasons=[],

@@ -75,6 +75,7 @@ def review(
         "notice": notice,
         "consists": aligned_rows(screen.run) if screen.run else [],
         "refresh_s": get_settings().review_refresh_s,
+        "heartbeat_s": get_settings().heartbeat_s,
     }
     return templates.TemplateResponse(request, "review.html", context)
 

@@ -27,7 +27,7 @@ WIDE = """car,taken_at,door_close_s,brake_release_s
 
 @pytest.fixture
 def db(client: TestClient, session: Session, monkeypatch: pytest.MonkeyPatch) -> sessionmaker:
-    """The CLI's sessions on the test's connection (committed inside its rolled-back transaction)."""
+    """The CLI's sessions on the test's connection, inside its rolled-back transaction."""
     build_line(client)
     factory = sessionmaker(bind=session.connection(), join_transaction_mode="create_savepoint")
     monkeypatch.setattr(commands, "get_sessionmaker", lambda: factory)

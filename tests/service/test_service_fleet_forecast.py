@@ -131,3 +131,30 @@ def test_pivot_carries_skipped_values_and_drops_rare_parameters() -> None:
     np.testing.assert_allclose(
         history.values, [[1, 5], [2, 5], [3, 6], [3, 7], [4.5, 7]]
     )  # skipped values carried forward; a repeated measurement keeps the later value
+
+
+def test_review_fleet_page_behind_login(stored: list[str], client: TestClient) -> None:
+    page = client.get("/review/fleet", follow_redirects=False)
+    assert page.status_code == 303 and page.headers["location"] == "/review/login"
+    assert client.get(f"/review/fleet/cars/{stored[0]}/forecast.png").status_code == 401
+    login = client.post("/review/login", data={"token": ADMIN["Authorization"][7:]})
+    assert login.status_code == 200  # followed to /review
+    html = client.get("/review/fleet").text
+    assert 'id="ranking"' in html
+    for car in stored:
+        assert f'data-car="{car}"' in html
+        assert f'src="/review/fleet/cars/{car}/forecast.png"' in html
+    chart = client.get(f"/review/fleet/cars/{stored[0]}/forecast.png")
+    assert chart.status_code == 200 and chart.content[:4] == b"\x89PNG"
+    short = client.post(
+        f"/review/fleet/cars/{stored[1]}/decision", data={"action": "withdraw_now", "reason": "x"}
+    )
+    assert "Give a reason of at least 3 characters." in short.text
+    decided = client.post(
+        f"/review/fleet/cars/{stored[1]}/decision",
+        data={"action": "withdraw_now", "reason": "compressor fill time creeping up"},
+    )
+    assert decided.status_code == 200 and "withdrawn now" in decided.text
+    assert "“compressor fill time creeping up”" in decided.text
+    body = client.get(f"/api/v1/cars/{stored[1]}/forecast", headers=ADMIN).json()
+    assert body["decision"] == "withdraw_now" and body["override"]["actor"] == "admin"

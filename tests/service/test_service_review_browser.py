@@ -17,11 +17,19 @@ CHROMIUM = Path("/usr/bin/chromium")
 SCREENSHOT = Path(__file__).resolve().parents[2] / "docs" / "review.png"
 pytestmark = [
     pytest.mark.browser,
-    pytest.mark.skipif(not CHROMIUM.exists(), reason="Debian chromium not installed (.ci/run installs it)"),
+    pytest.mark.skipif(
+        not CHROMIUM.exists(), reason="Debian chromium not installed (.ci/run installs it)"
+    ),
 ]
 CHROMIUM_ARGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
 ]
 
 
@@ -33,7 +41,9 @@ def test_dispatcher_blocks_the_alarm_and_clears_another(tmp_path: Path) -> None:
         with get_sessionmaker().begin() as session:
             token = create_user(session, "olena", "dispatcher")
         admin = {"Authorization": f"Bearer {get_settings().admin_token}"}
-        states = {s["id"]: s["state"] for s in httpx.get(f"{url}/api/v1/sections", headers=admin).json()}
+        states = {
+            s["id"]: s["state"] for s in httpx.get(f"{url}/api/v1/sections", headers=admin).json()
+        }
         assert states == {"AB": "alarm", "BC": "review"}, states
 
         with sync_playwright() as playwright:
@@ -51,13 +61,18 @@ def test_dispatcher_blocks_the_alarm_and_clears_another(tmp_path: Path) -> None:
                 image = run.locator(f"figure[data-side={side}] img")
                 expect(image).to_be_visible()
                 assert image.evaluate("img => img.complete && img.naturalWidth > 0"), side
-            missing = run.locator("table.consist tr.mark-missing")
-            assert missing.count() == 2, "the two lost cars are marked"
+            tables = run.locator("div.consist")
+            assert tables.count() == 2, "wheel-mark and infrared consists"
+            for i in range(2):
+                missing = tables.nth(i).locator(".car.mark-missing")
+                assert missing.count() == 2, "the two lost cars are marked"
             SCREENSHOT.parent.mkdir(exist_ok=True)
             page.screenshot(path=str(SCREENSHOT))
 
             keep = run.locator("form:has(input[value=keep_blocked])")
-            keep.locator("textarea").fill("two cars missing; section closed until the line is walked")
+            keep.locator("textarea").fill(
+                "two cars missing; section closed until the line is walked"
+            )
             keep.locator("button").click()
             expect(page.locator(".notice")).to_contain_text("kept blocked")
 
@@ -68,8 +83,12 @@ def test_dispatcher_blocks_the_alarm_and_clears_another(tmp_path: Path) -> None:
             expect(page.locator(".notice")).to_contain_text("cleared")
             browser.close()
 
-        states = {s["id"]: s["state"] for s in httpx.get(f"{url}/api/v1/sections", headers=admin).json()}
+        states = {
+            s["id"]: s["state"] for s in httpx.get(f"{url}/api/v1/sections", headers=admin).json()
+        }
         assert states == {"AB": "blocked", "BC": "free"}, states
         audit = httpx.get(f"{url}/api/v1/audit", headers=admin).json()
         assert [(a["section"], a["action"], a["actor"]) for a in audit[:2]] == [
-            ("BC", "clear", "olena"), ("AB", "keep_blocked", "olena")]
+            ("BC", "clear", "olena"),
+            ("AB", "keep_blocked", "olena"),
+        ]
