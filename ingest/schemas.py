@@ -102,6 +102,9 @@ class MotionSample(EventBase):
     gnss_speed_mps: Annotated[float, Field(ge=0, le=200, allow_inf_nan=False)] | None = None
     gnss_delay_s: Annotated[float, Field(ge=0, le=600, allow_inf_nan=False)] | None = None
     marker_id: Annotated[str, Field(min_length=1, max_length=64)] | None = None
+    # Optional GNSS position, used to place a marker the reader missed (depot addition).
+    gnss_lat: Annotated[float, Field(ge=-90, le=90, allow_inf_nan=False)] | None = None
+    gnss_lon: Annotated[float, Field(ge=-180, le=180, allow_inf_nan=False)] | None = None
 
 
 class Heartbeat(EventBase):

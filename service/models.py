@@ -5,7 +5,7 @@ from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run, 
 from service.database import Base
 from service.fleet.models import Forecast, MaintenanceOverride, Measurement, Parameter
 from service.setup.models import Car, Device, Section, Station, User
-from service.trains.models import TrainPosition
+from service.trains.models import TrackMarker, TrainPosition
 
 metadata = Base.metadata
 
@@ -24,6 +24,7 @@ __all__ = [
     "Section",
     "Snapshot",
     "Station",
+    "TrackMarker",
     "TrainPosition",
     "User",
     "WheelMarking",

@@ -2,7 +2,7 @@
 
 Revision ID: 0001
 Revises:
-Create Date: 2026-11-23 15:33:03.155268
+Create Date: 2026-11-23 15:56:18.085672
 """
 
 from __future__ import annotations
@@ -63,6 +63,15 @@ def upgrade() -> None:
         sa.Column("name", sa.String(length=200), nullable=False),
         sa.Column("created_at", sa.DateTime(timezone=True), nullable=False),
         sa.PrimaryKeyConstraint("id", name=op.f("pk_stations")),
+    )
+    op.create_table(
+        "track_markers",
+        sa.Column("id", sa.String(length=64), nullable=False),
+        sa.Column("track_m", sa.Float(), nullable=False),
+        sa.Column("section", sa.String(length=32), nullable=True),
+        sa.Column("lat", sa.Float(), nullable=True),
+        sa.Column("lon", sa.Float(), nullable=True),
+        sa.PrimaryKeyConstraint("id", name=op.f("pk_track_markers")),
     )
     op.create_table(
         "train_positions",
@@ -393,6 +402,7 @@ def downgrade() -> None:
     op.drop_table("forecasts")
     op.drop_table("users")
     op.drop_table("train_positions")
+    op.drop_table("track_markers")
     op.drop_table("stations")
     op.drop_table("maintenance_parameters")
     op.drop_table("cars")

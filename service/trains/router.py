@@ -1,0 +1,32 @@
+"""Track markers (admin) and train positions (readers)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter
+from sqlalchemy import select
+
+from service.auth import Admin, CurrentReader
+from service.database import DbSession
+from service.trains import service
+from service.trains.models import TrackMarker
+from service.trains.schemas import MarkerIn, MarkerOut
+
+router = APIRouter(tags=["motion"])
+
+
+@router.post("/markers", status_code=201, response_model=MarkerOut)
+def create_marker(body: MarkerIn, session: DbSession, _: Admin) -> Any:
+    return service.add_marker(session, body)
+
+
+@router.get("/markers", response_model=list[MarkerOut])
+def list_markers(session: DbSession, _: CurrentReader) -> Any:
+    return session.scalars(select(TrackMarker).order_by(TrackMarker.track_m)).all()
+
+
+@router.get("/trains/{train}/position")
+def train_position(train: str, session: DbSession, _: CurrentReader) -> dict[str, Any]:
+    """Coordinate, speed, section and their uncertainty from the train's fused sensors."""
+    return service.position(session, train)

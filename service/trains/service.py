@@ -1,0 +1,68 @@
+"""One fusion filter per train, kept as a JSON snapshot so any API worker can continue it."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from motion.fusion import FilterConfig, Marker, MarkerTable, TrackFilter
+from service.errors import Conflict, NotFound, Unprocessable
+from service.setup.models import Section
+from service.trains.models import TrackMarker, TrainPosition
+from service.trains.schemas import MarkerIn
+
+
+def marker_table(session: Session) -> MarkerTable:
+    """The line's markers; a section spans the track coordinates of its own markers."""
+    markers = session.scalars(select(TrackMarker).order_by(TrackMarker.track_m)).all()
+    spans: dict[str, list[float]] = {}
+    for marker in markers:
+        if marker.section:
+            spans.setdefault(marker.section, []).append(marker.track_m)
+    return MarkerTable(
+        [Marker(m.id, m.track_m, m.lat, m.lon) for m in markers],
+        sections=[(ident, min(span), max(span)) for ident, span in spans.items()],
+    )
+
+
+def add_marker(session: Session, data: MarkerIn) -> TrackMarker:
+    if session.get(TrackMarker, data.id) is not None:
+        raise Conflict(f"marker {data.id!r} already exists")
+    if data.section is not None and session.get(Section, data.section) is None:
+        raise Unprocessable(f"section {data.section!r} does not exist")
+    marker = TrackMarker(**data.model_dump())
+    session.add(marker)
+    session.flush()
+    return marker
+
+
+def feed(session: Session, train: str, sample: dict[str, Any], at: Any) -> dict[str, Any]:
+    """Advance the train's filter by one ``motion_sample``; returns the new state."""
+    row = session.scalar(
+        select(TrainPosition).where(TrainPosition.train == train).with_for_update()
+    )
+    table = marker_table(session)
+    if row is None or not row.filter_state:
+        track_filter = TrackFilter(table, FilterConfig())
+    else:
+        try:
+            track_filter = TrackFilter.from_dict(row.filter_state, table)
+        except ValueError:
+            # The marker table changed since the filter started: start again from it.
+            track_filter = TrackFilter(table, FilterConfig())
+    state = track_filter.update(sample).as_dict()
+    if row is None:
+        row = TrainPosition(train=train)
+        session.add(row)
+    row.updated_at, row.state, row.filter_state = at, state, track_filter.to_dict()
+    session.flush()
+    return state
+
+
+def position(session: Session, train: str) -> dict[str, Any]:
+    row = session.get(TrainPosition, train)
+    if row is None:
+        raise NotFound(f"no motion samples received for train {train!r}")
+    return {"train": train, "updated_at": row.updated_at.isoformat(), **row.state}

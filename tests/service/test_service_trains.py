@@ -1,0 +1,69 @@
+"""Train position from motion samples, through the real event API."""
+
+from __future__ import annotations
+
+from datetime import timedelta
+
+from fastapi.testclient import TestClient
+
+from tests.conftest import ADMIN
+from tests.service.linekit import build_line, post_ok
+from tests.service.scenario import T0, iso
+
+
+def track(t: float) -> tuple[float, float, float]:
+    """Start from standstill at 0.5 m/s² to 20 m/s (40 s, 400 m), then cruise."""
+    if t <= 40.0:
+        return 0.25 * t * t, 0.5 * t, 0.5
+    return 400.0 + 20.0 * (t - 40.0), 20.0, 0.0
+
+
+def samples(seconds: int, markers: dict[float, str]) -> list[dict]:
+    """10 Hz accelerometer, GNSS speed each second (1.5 s late), marker reads."""
+    out = []
+    for i in range(seconds * 10):
+        t = i / 10
+        position, _, accel = track(t)
+        body = {
+            "event_id": f"m-{i}",
+            "occurred_at": iso(T0 + timedelta(seconds=t)),
+            "kind": "motion_sample",
+            "train": "2041",
+            "t": t,
+            "accel_mps2": accel,
+        }
+        if i % 10 == 0 and t >= 1.5:
+            body |= {"gnss_speed_mps": track(t - 1.5)[1], "gnss_delay_s": 1.5}
+        next_position = track(t + 0.1)[0]
+        for at, marker in markers.items():
+            if position <= at < next_position or (at == 0.0 and i == 0):
+                body["marker_id"] = marker
+        out.append(body)
+    return out
+
+
+def test_position_follows_markers_and_gnss(client: TestClient) -> None:
+    keys = build_line(client)
+    for ident, track_m in (("M0", 0.0), ("M1", 600.0), ("M2", 2400.0)):
+        post_ok(client, "/api/v1/markers", {"id": ident, "track_m": track_m, "section": "AB"})
+    batch = samples(90, {0.0: "M0", 600.0: "M1"})
+    response = client.post("/api/v1/events", json={"events": batch}, headers=keys["T-obu"])
+    assert response.status_code == 200
+    assert {r["status"] for r in response.json()["results"]} == {"created"}
+    position = client.get("/api/v1/trains/2041/position", headers=ADMIN).json()
+    expected = track(89.9)[0]
+    assert abs(position["position_m"] - expected) < 5.0, position
+    assert abs(position["speed_mps"] - 20.0) < 0.5
+    assert position["sigma_position_m"] < 10.0 and position["section"] == "AB"
+
+
+def test_position_unknown_train_and_roles(client: TestClient) -> None:
+    keys = build_line(client)
+    assert client.get("/api/v1/trains/9999/position", headers=ADMIN).status_code == 404
+    assert client.get("/api/v1/trains/9999/position").status_code == 401
+    assert client.get("/api/v1/trains/9999/position", headers=keys["T-obu"]).status_code == 403
+    duplicate = {"id": "M0", "track_m": 0.0}
+    post_ok(client, "/api/v1/markers", duplicate)
+    assert client.post("/api/v1/markers", json=duplicate, headers=ADMIN).status_code == 409
+    bad = client.post("/api/v1/markers", json={"id": "M9", "track_m": -1}, headers=ADMIN)
+    assert bad.status_code == 422
