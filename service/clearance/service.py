@@ -5,11 +5,11 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import select
+from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
-from service.auth import Principal
 from ingest.models import Snapshot
+from service.auth import Principal
 from service.clearance.evidence import EVIDENCE_WINDOW, gather, run_at, side_of
 from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run
 from service.clearance.rules import decide, section_state
@@ -74,19 +74,24 @@ def adopt_departure_evidence(session: Session, run: Run) -> int:
     """Departure-side readers and cameras see the train just before the interlocking reports
     the departure: their evidence, stored without a run, now joins this run."""
     adopted = 0
-    for model in (Snapshot, CarPassage, AxleReading):
-        rows = session.scalars(
-            select(model).where(
+    models: tuple[type[Snapshot] | type[CarPassage] | type[AxleReading], ...] = (
+        Snapshot,
+        CarPassage,
+        AxleReading,
+    )
+    for model in models:
+        result = session.execute(
+            update(model)
+            .where(
                 model.run_id.is_(None),
                 model.section == run.section,
                 model.station == run.from_station,
                 model.occurred_at >= run.departed_at - EVIDENCE_WINDOW,
                 model.occurred_at <= run.departed_at,
             )
-        ).all()
-        for row in rows:
-            row.run_id, row.side = run.id, "departure"
-        adopted += len(rows)
+            .values(run_id=run.id, side="departure")
+        )
+        adopted += result.rowcount  # type: ignore[attr-defined]
     return adopted
 
 
