@@ -7,8 +7,7 @@ Run: .venv/bin/python bench/maintenance.py
    weights, and the vectorized ``assess_fleet``. (The end-to-end PostgreSQL
    job of issue 6 — reading histories and writing forecasts — belongs to the
    service; these are the computation-only figures.)
-2. Method comparison on the simulated fleet (issue 6 accuracy table).
-3. NASA C-MAPSS FD001: RUL RMSE of the index forecast beside published peers.
+2. NASA C-MAPSS FD001: RUL RMSE of the index forecast beside published peers.
 """
 
 from __future__ import annotations
@@ -24,7 +23,6 @@ sys.path.insert(0, str(ROOT))
 
 from maintenance import METHODS, assess_fleet, calibrate_fleet  # noqa: E402
 from maintenance.cmapss import PUBLISHED_RMSE, evaluate_fd001  # noqa: E402
-from maintenance.evaluation import compare_methods  # noqa: E402
 from maintenance.fleet import assess_car, rank_fleet  # noqa: E402
 from maintenance.simulate import simulate_fleet  # noqa: E402
 
@@ -65,23 +63,6 @@ def _report(label: str, n: int, wall: float, cpu: float) -> None:
     )
 
 
-def methods_table() -> None:
-    reference = simulate_fleet(800, n_times=230, seed=1)
-    test = simulate_fleet(1000, seed=3)
-    print(
-        "\n## methods on the simulated fleet (reference seed 1: 800 cars; test seed 3: 1000 cars)"
-    )
-    print(
-        f"{'method':18s} {'recall':>7s} {'false':>7s} {'flagged':>8s} {'leaving':>8s}  index band"
-    )
-    for s in compare_methods(reference, test, methods=METHODS):
-        lo, hi = s.index_band
-        print(
-            f"{s.method:18s} {s.recall:7.3f} {s.false_share:7.3f} {s.flagged:8d} "
-            f"{s.positives:8d}  [{lo:.3f}, {hi:.3f}]"
-        )
-
-
 def cmapss_table() -> None:
     print("\n## NASA C-MAPSS FD001 test engines (100), RUL from the index forecast")
     if not (CMAPSS / "train_FD001.txt").exists():
@@ -103,7 +84,6 @@ def main() -> int:
     t0 = time.perf_counter()
     np.seterr(all="ignore")
     throughput()
-    methods_table()
     cmapss_table()
     print(f"\ntotal {time.perf_counter() - t0:.1f} s")
     return 0

@@ -76,17 +76,21 @@ def check_section(session: Session, device: Device, section_id: str | None) -> N
         )
 
 
-def _insert_raw(session: Session, values: dict[str, Any]) -> int | None:
-    """Insert unless (device, event_id) exists; returns the new id, or None for a duplicate."""
+def _insert_raw(session: Session, values: dict[str, Any]) -> RawEvent | None:
+    """Insert unless (device, event_id) exists; returns the new row, or None for a duplicate.
+
+    One statement either way: the unique key, not a read-then-write, decides who stored it,
+    so concurrent retries of the same event cannot both win.
+    """
     dialect = session.get_bind().dialect.name
     module = postgresql if dialect == "postgresql" else sqlite
     statement = (
         module.insert(RawEvent)
         .values(**values)
         .on_conflict_do_nothing(index_elements=["device_id", "event_id"])
-        .returning(RawEvent.id)
+        .returning(RawEvent)
     )
-    return session.execute(statement).scalar_one_or_none()
+    return session.scalars(statement).one_or_none()
 
 
 def store_event(
@@ -98,7 +102,7 @@ def store_event(
     with the same body, 409 (raised) for the same ``event_id`` with a different body.
     """
     digest = canonical_sha256(body)
-    raw_id = _insert_raw(
+    raw = _insert_raw(
         session,
         {
             "device_id": device.id,
@@ -111,7 +115,7 @@ def store_event(
             "result": {},
         },
     )
-    if raw_id is None:
+    if raw is None:
         existing = session.scalar(
             select(RawEvent).where(
                 RawEvent.device_id == device.id, RawEvent.event_id == event.event_id
@@ -123,7 +127,6 @@ def store_event(
                 f"event_id {event.event_id!r} was already used by {device.id} for a different event"
             )
         return 200, existing.result
-    raw = session.get_one(RawEvent, raw_id)
     raw.result = {
         "event_id": event.event_id,
         "status": "created",

@@ -19,6 +19,7 @@ from sqlalchemy import select
 
 from identification.simulate import ir_pulses_passage, wheel_mark_passage
 from service.database import get_sessionmaker
+from service.fleet.demo import load_fleet_history
 from service.settings import get_settings
 from service.setup.models import Station
 from tail_check.synth import render_snapshot
@@ -250,7 +251,7 @@ def day_of_traffic(line: DemoLine, end: datetime) -> None:
     line.run(Trip("BC", "B", "C", "2045", cars[0:6], t + timedelta(hours=5)))
 
 
-def load_demo(*, force: bool = False) -> int:
+def load_demo(*, force: bool = False, fleet: bool = True) -> int:
     from service.app import create_app
 
     with get_sessionmaker()() as session:
@@ -261,6 +262,8 @@ def load_demo(*, force: bool = False) -> int:
         line = DemoLine(client)
         line.build()
         now = datetime.now(UTC).replace(microsecond=0)
+        if fleet:
+            load_fleet_history(client, line.admin, line.keys["D-bench"], FLEET, end=now)
         day_of_traffic(line, now - timedelta(minutes=5))
         states = {
             s["id"]: s["state"] for s in client.get("/api/v1/sections", headers=line.admin).json()

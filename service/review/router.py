@@ -35,11 +35,11 @@ def login_form(request: Request, error: str | None = None) -> Response:
 @router.post("/review/login")
 def login(request: Request, session: DbSession, token: Annotated[str, Form()]) -> Response:
     person = person_for_token(session, token.strip())
-    if person is None or person.role not in ("dispatcher", "admin"):
+    if person is None:
         return templates.TemplateResponse(
             request,
             "login.html",
-            {"error": "That token is not a dispatcher's token."},
+            {"error": "That token is not known. Ask an administrator for a token."},
             status_code=401,
         )
     response = RedirectResponse("/review", status_code=303)
@@ -89,9 +89,11 @@ def decide(
     reason: Annotated[str, Form()] = "",
 ) -> Response:
     who = _who(request, session)
-    if who is None or who.role not in ("dispatcher", "admin"):
+    if who is None:
         return RedirectResponse("/review/login", status_code=303)
-    if action not in ("clear", "keep_blocked") or len(reason.strip()) < 3:
+    if who.role not in ("dispatcher", "admin"):
+        notice = "Only a dispatcher may clear or block a section."
+    elif action not in ("clear", "keep_blocked") or len(reason.strip()) < 3:
         notice = "Give a reason of at least 3 characters."
     else:
         try:

@@ -37,7 +37,7 @@ def test_dispatcher_blocks_the_alarm_and_clears_another(tmp_path: Path) -> None:
     from playwright.sync_api import expect, sync_playwright
 
     with live_server(tmp_path) as url:
-        assert load_demo() == 0
+        assert load_demo(fleet=False) == 0
         with get_sessionmaker().begin() as session:
             token = create_user(session, "olena", "dispatcher")
         admin = {"Authorization": f"Bearer {get_settings().admin_token}"}
