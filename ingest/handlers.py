@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from datetime import timedelta
 from typing import Any
 
 from sqlalchemy.orm import Session
@@ -28,6 +29,7 @@ class Derivation:
 
 
 Handler = Callable[[Derivation], dict[str, Any] | None]
+LAST_SEEN_GRANULARITY = timedelta(seconds=5)
 HANDLERS: dict[str, list[Handler]] = {}
 
 
@@ -44,7 +46,9 @@ def derive(derivation: Derivation) -> dict[str, Any]:
     """Run every handler of the event's kind; merge what they report for the client."""
     device = derivation.device
     occurred = derivation.raw.occurred_at
-    if device.last_seen_at is None or occurred > device.last_seen_at:
+    # Liveness has the heartbeat period's granularity: a device sending many events a second
+    # need not rewrite its row for each one (decisions read staleness from the raw events).
+    if device.last_seen_at is None or occurred > device.last_seen_at + LAST_SEEN_GRANULARITY:
         device.last_seen_at = occurred
     result: dict[str, Any] = {}
     for handler in HANDLERS.get(derivation.raw.kind, ()):

@@ -5,7 +5,7 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import JSON, BigInteger, ForeignKey, Integer, String, Text, UniqueConstraint
+from sqlalchemy import JSON, BigInteger, ForeignKey, Index, Integer, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
 from service.database import Base, UTCDateTime, utcnow
@@ -15,10 +15,14 @@ BigId = BigInteger().with_variant(Integer, "sqlite")
 
 class RawEvent(Base):
     __tablename__ = "raw_events"
-    __table_args__ = (UniqueConstraint("device_id", "event_id"),)
+    __table_args__ = (
+        UniqueConstraint("device_id", "event_id"),
+        # Serves "latest event of a device before t" (heartbeat staleness at decision time).
+        Index("ix_raw_events_device_id_occurred_at", "device_id", "occurred_at"),
+    )
 
     id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
-    device_id: Mapped[str] = mapped_column(ForeignKey("devices.id"), index=True)
+    device_id: Mapped[str] = mapped_column(ForeignKey("devices.id"))
     event_id: Mapped[str] = mapped_column(String(64))
     kind: Mapped[str] = mapped_column(String(32), index=True)
     occurred_at: Mapped[datetime] = mapped_column(UTCDateTime())

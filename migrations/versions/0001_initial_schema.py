@@ -296,7 +296,10 @@ def upgrade() -> None:
         sa.UniqueConstraint("device_id", "event_id", name=op.f("uq_raw_events_device_id_event_id")),
     )
     with op.batch_alter_table("raw_events", schema=None) as batch_op:
-        batch_op.create_index(batch_op.f("ix_raw_events_device_id"), ["device_id"], unique=False)
+        # Serves "latest event of a device before t" (heartbeat staleness at decision time).
+        batch_op.create_index(
+            "ix_raw_events_device_id_occurred_at", ["device_id", "occurred_at"], unique=False
+        )
         batch_op.create_index(batch_op.f("ix_raw_events_kind"), ["kind"], unique=False)
 
     op.create_table(
@@ -366,7 +369,7 @@ def downgrade() -> None:
     op.drop_table("snapshots")
     with op.batch_alter_table("raw_events", schema=None) as batch_op:
         batch_op.drop_index(batch_op.f("ix_raw_events_kind"))
-        batch_op.drop_index(batch_op.f("ix_raw_events_device_id"))
+        batch_op.drop_index("ix_raw_events_device_id_occurred_at")
 
     op.drop_table("raw_events")
     with op.batch_alter_table("car_passages", schema=None) as batch_op:
