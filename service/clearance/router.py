@@ -13,7 +13,7 @@ from ingest.models import Snapshot
 from ingest.snapshots import load_bgr
 from service.auth import CurrentDispatcher, CurrentReader
 from service.clearance import service
-from service.clearance.models import AuditRecord, Run
+from service.clearance.models import AuditRecord, Run, WheelMarking
 from service.clearance.schemas import DecisionIn
 from service.clearance.tail import camera_profile, snapshot_file
 from service.clearance.views import audit_out, run_out, section_out
@@ -149,3 +149,25 @@ def get_snapshot_overlay(snapshot_id: int, session: DbSession, _: CurrentReader)
     return Response(
         png, media_type="image/png", headers={"Cache-Control": "private, max-age=86400"}
     )
+
+
+@router.get("/cars/{car_id}/wheel-markings")
+def list_wheel_markings(car_id: str, session: DbSession, _: CurrentReader) -> list[dict[str, Any]]:
+    """The marking station's results for a car: per axle written or not, state, faults."""
+    rows = session.scalars(
+        select(WheelMarking)
+        .where(WheelMarking.car_id == car_id)
+        .order_by(WheelMarking.occurred_at.desc(), WheelMarking.id.desc())
+    )
+    return [
+        {
+            "id": m.id,
+            "device": m.device_id,
+            "code": m.code,
+            "state": m.state,
+            "written": m.written,
+            "faults": m.faults,
+            "occurred_at": m.occurred_at.isoformat(),
+        }
+        for m in rows
+    ]

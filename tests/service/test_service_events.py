@@ -213,3 +213,16 @@ def test_same_event_from_twenty_threads_is_stored_once(committed_app: Any, engin
     with engine.connect() as connection:
         stored = connection.scalar(select(func.count()).select_from(RawEvent))
     assert stored == 1
+
+
+def test_wheel_marking_outcomes_are_listed(client: TestClient) -> None:
+    keys = build_line(client)
+    reversed_out = ["W1", "W2", "W1", "W2", "W2", "W1", "W2", "W1"]
+    for event_id, detections in (("mk-1", ["W1", "W2"] * 4), ("mk-2", reversed_out)):
+        body = event(event_id, "wheel_marks_written", car="0117", code=117, detections=detections)
+        assert client.post("/api/v1/events", json=body, headers=keys["D-mark"]).status_code == 201
+    from tests.conftest import ADMIN
+
+    markings = client.get("/api/v1/cars/0117/wheel-markings", headers=ADMIN).json()
+    assert [m["state"] for m in markings] == ["lost", "marked"]
+    assert markings[1]["written"] == [True, True, True, True]
