@@ -12,7 +12,7 @@ from sqlalchemy import select
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
-from ingest.handlers import Derivation, derive
+from ingest.handlers import HANDLERS, Derivation, derive
 from ingest.models import RawEvent
 from ingest.schemas import ALLOWED_KINDS, EVENT_ADAPTER, EVENT_KINDS, TailSnapshot
 from service.errors import Conflict, Forbidden, Unprocessable, validation_errors
@@ -140,9 +140,12 @@ def run_derivation(
     session: Session, raw: RawEvent, event: Any, device: Device, *, replaying: bool = False
 ) -> dict[str, Any]:
     """Derive state from a stored event; a failing derivation never loses the raw event."""
+    derivation = Derivation(session, raw, event, device, replaying)
+    if not HANDLERS.get(raw.kind):
+        return derive(derivation)  # liveness only: nothing that can fail half-way
     try:
         with session.begin_nested():
-            return derive(Derivation(session, raw, event, device, replaying))
+            return derive(derivation)
     except Exception as exc:  # noqa: BLE001 - the raw event is kept; the fault is recorded
         log.exception("deriving from %s/%s failed", device.id, raw.event_id)
         raw.derive_error = f"{type(exc).__name__}: {exc}"
@@ -163,8 +166,10 @@ def accept_batch(session: Session, device: Device, items: list[Any]) -> list[dic
     for item in items:
         event_id = item.get("event_id") if isinstance(item, dict) else None
         try:
-            with session.begin_nested():
-                status, result = accept_event(session, device, item)
+            # No savepoint per item: a rejection is decided before anything is written, and
+            # derivations guard themselves; an unexpected database error fails the whole batch,
+            # unacknowledged, and the device's retry is idempotent.
+            status, result = accept_event(session, device, item)
             results.append(
                 {
                     "event_id": event_id,
