@@ -1,0 +1,67 @@
+"""The ``depot`` command line on its own embedded database."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from service import database
+from service.cli import main
+from service.settings import get_settings
+
+
+@pytest.fixture
+def cli_data_dir(tmp_path: Path) -> Iterator[Path]:
+    saved = {k: os.environ.get(k) for k in ("DEPOT_DATA_DIR", "DEPOT_DATABASE_URL")}
+    os.environ["DEPOT_DATA_DIR"] = str(tmp_path)
+    os.environ.pop("DEPOT_DATABASE_URL", None)
+    for cache in (get_settings, database.get_engine, database.get_sessionmaker):
+        cache.cache_clear()
+    yield tmp_path
+    database.get_engine().dispose()
+    for key, value in saved.items():
+        if value is None:
+            os.environ.pop(key, None)
+        else:
+            os.environ[key] = value
+    for cache in (get_settings, database.get_engine, database.get_sessionmaker):
+        cache.cache_clear()
+
+
+def test_migrate_user_add_and_replay(
+    cli_data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["migrate"]) == 0
+    assert (cli_data_dir / "depot.sqlite3").exists()
+    assert main(["user", "add", "olena", "--role", "dispatcher"]) == 0
+    token = capsys.readouterr().out.strip().splitlines()[-1]
+    assert len(token) >= 40
+    assert main(["user", "add", "olena", "--role", "engineer"]) == 2
+    assert "already exists" in capsys.readouterr().err
+    assert main(["replay"]) == 0
+    assert "replayed 0 raw events" in capsys.readouterr().out
+
+
+def test_unknown_role_and_no_command(
+    cli_data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["user", "add", "ivan", "--role", "driver"])
+    assert exit_info.value.code == 2
+    assert "invalid choice" in capsys.readouterr().err
+    assert main([]) == 2
+    assert "serve" in capsys.readouterr().out
+
+
+def test_demo_loads_once(cli_data_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["migrate"]) == 0
+    assert main(["demo"]) == 0
+    out = capsys.readouterr().out
+    assert "'AB': 'alarm'" in out and "'BC': 'review'" in out
+    assert main(["demo"]) == 0
+    assert "already holds a line" in capsys.readouterr().out
+    assert main(["replay"]) == 0
+    assert "(0 failed to derive)" in capsys.readouterr().out
