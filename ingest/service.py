@@ -101,20 +101,9 @@ def store_event(
     201 for a new event (derived results included), 200 with the original result for a retry
     with the same body, 409 (raised) for the same ``event_id`` with a different body.
     """
-    digest = canonical_sha256(body)
-    raw = _insert_raw(
-        session,
-        {
-            "device_id": device.id,
-            "event_id": event.event_id,
-            "kind": event.kind,
-            "occurred_at": event.occurred_at,
-            "section": getattr(event, "section", None),
-            "body": body,
-            "body_sha256": digest,
-            "result": {},
-        },
-    )
+    values = _raw_values(device, event, body)
+    digest = values["body_sha256"]
+    raw = _insert_raw(session, values)
     if raw is None:
         existing = session.scalar(
             select(RawEvent).where(
@@ -127,11 +116,9 @@ def store_event(
                 f"event_id {event.event_id!r} was already used by {device.id} for a different event"
             )
         return 200, existing.result
-    raw.result = {
-        "event_id": event.event_id,
-        "status": "created",
-        **run_derivation(session, raw, event, device),
-    }
+    derived = run_derivation(session, raw, event, device)
+    if HANDLERS.get(event.kind):
+        raw.result = {"event_id": event.event_id, "status": "created", **derived}
     session.flush()
     return 201, raw.result
 
@@ -160,35 +147,111 @@ def accept_event(session: Session, device: Device, payload: Any) -> tuple[int, d
     return store_event(session, device, event, payload)
 
 
-def accept_batch(session: Session, device: Device, items: list[Any]) -> list[dict[str, Any]]:
-    """Each item stands alone: a rejected item leaves the others stored."""
-    results: list[dict[str, Any]] = []
-    for item in items:
-        event_id = item.get("event_id") if isinstance(item, dict) else None
+def _rejected(event_id: Any, exc: Unprocessable | Conflict | Forbidden) -> dict[str, Any]:
+    error: dict[str, Any] = {"status": exc.status, "title": exc.title, "detail": exc.detail}
+    if exc.errors:
+        error["errors"] = exc.errors
+    return {
+        "event_id": event_id if isinstance(event_id, str) else None,
+        "status": "rejected",
+        "error": error,
+    }
+
+
+def _validated(
+    session: Session, device: Device, items: list[Any]
+) -> tuple[list[dict[str, Any] | None], list[tuple[int, Any, dict[str, Any]]]]:
+    """Validate every item; returns the per-item rejections and the accepted (index, event,
+    payload) triples. Nothing is written, so a rejection cannot disturb the others."""
+    results: list[dict[str, Any] | None] = [None] * len(items)
+    accepted: list[tuple[int, Any, dict[str, Any]]] = []
+    sections_ok: set[str | None] = set()
+    for index, item in enumerate(items):
         try:
-            # No savepoint per item: a rejection is decided before anything is written, and
-            # derivations guard themselves; an unexpected database error fails the whole batch,
-            # unacknowledged, and the device's retry is idempotent.
-            status, result = accept_event(session, device, item)
-            results.append(
-                {
-                    "event_id": event_id,
-                    "status": "created" if status == 201 else "duplicate",
-                    "result": result,
-                }
+            event = parse_event(item)
+            check_device_may_send(device, event.kind)
+            section = getattr(event, "section", None)
+            if section not in sections_ok:
+                check_section(session, device, section)
+                sections_ok.add(section)
+        except (Unprocessable, Forbidden) as exc:
+            results[index] = _rejected(
+                item.get("event_id") if isinstance(item, dict) else None, exc
             )
-        except (Unprocessable, Conflict, Forbidden) as exc:
-            error = {"status": exc.status, "title": exc.title, "detail": exc.detail}
-            if exc.errors:
-                error["errors"] = exc.errors
-            results.append(
-                {
-                    "event_id": event_id if isinstance(event_id, str) else None,
-                    "status": "rejected",
-                    "error": error,
-                }
-            )
-    return results
+            continue
+        accepted.append((index, event, item))
+    return results, accepted
+
+
+def _raw_values(device: Device, event: Any, body: dict[str, Any]) -> dict[str, Any]:
+    # Events no feature derives from answer just "created": store that answer with the row.
+    derived = bool(HANDLERS.get(event.kind))
+    return {
+        "device_id": device.id,
+        "event_id": event.event_id,
+        "kind": event.kind,
+        "occurred_at": event.occurred_at,
+        "section": getattr(event, "section", None),
+        "body": body,
+        "body_sha256": canonical_sha256(body),
+        "result": {} if derived else {"event_id": event.event_id, "status": "created"},
+    }
+
+
+def _insert_many(session: Session, rows: list[dict[str, Any]]) -> dict[str, RawEvent]:
+    """Insert the rows whose (device, event_id) is new, in one statement; returns them by id."""
+    if not rows:
+        return {}
+    module = postgresql if session.get_bind().dialect.name == "postgresql" else sqlite
+    statement = (
+        module.insert(RawEvent)
+        .on_conflict_do_nothing(index_elements=["device_id", "event_id"])
+        .returning(RawEvent)
+    )
+    return {raw.event_id: raw for raw in session.scalars(statement, rows)}
+
+
+def accept_batch(session: Session, device: Device, items: list[Any]) -> list[dict[str, Any]]:
+    """Each item stands alone: a rejected item leaves the others stored.
+
+    The new events are inserted with one multi-row statement (the unique key still decides
+    duplicates), then derived one by one in the batch's order.
+    """
+    results, accepted = _validated(session, device, items)
+    first: dict[str, tuple[int, Any, dict[str, Any]]] = {}
+    repeats = []
+    for entry in accepted:
+        if entry[1].event_id in first:
+            repeats.append(entry)
+        else:
+            first[entry[1].event_id] = entry
+    inserted = _insert_many(session, [_raw_values(device, e, b) for _, e, b in first.values()])
+    for index, event, body in first.values():
+        raw = inserted.get(event.event_id)
+        if raw is None:  # stored before: a retry, or a reuse of the id
+            try:
+                status, result = store_event(session, device, event, body)
+            except Conflict as exc:
+                results[index] = _rejected(event.event_id, exc)
+                continue
+        else:
+            derived = run_derivation(session, raw, event, device)
+            if HANDLERS.get(event.kind):
+                raw.result = {"event_id": event.event_id, "status": "created", **derived}
+            status, result = 201, raw.result
+        results[index] = {
+            "event_id": event.event_id,
+            "status": "created" if status == 201 else "duplicate",
+            "result": result,
+        }
+    for index, event, body in repeats:
+        try:
+            status, result = store_event(session, device, event, body)
+            results[index] = {"event_id": event.event_id, "status": "duplicate", "result": result}
+        except Conflict as exc:
+            results[index] = _rejected(event.event_id, exc)
+    session.flush()
+    return [r for r in results if r is not None]
 
 
 def accept_snapshot(
