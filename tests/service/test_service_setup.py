@@ -78,3 +78,27 @@ def test_user_tokens_stored_hashed(session: Session) -> None:
     token = create_user(session, "ivan", "engineer")
     user = session.scalar(select(User).where(User.name == "ivan"))
     assert user is not None and user.role == "engineer" and user.token_hash == hash_secret(token)
+
+
+def test_production_refuses_unsafe_defaults() -> None:
+    import pytest
+    from pydantic import ValidationError
+
+    from service.settings import Settings
+
+    with pytest.raises(ValidationError, match="DEPOT_ADMIN_TOKEN"):
+        Settings(environment="production", admin_token="dev-admin-token")
+    with pytest.raises(ValidationError, match="PostgreSQL"):
+        Settings(environment="production", admin_token="x" * 32)
+    safe = Settings(
+        environment="production", admin_token="x" * 32, database_url="postgresql+psycopg://db/depot"
+    )
+    assert safe.resolved_database_url.startswith("postgresql")
+
+
+def test_openapi_documents_the_event_schemas(client: TestClient) -> None:
+    document = client.get("/openapi.json").json()
+    schemas = document["components"]["schemas"]
+    assert {"DeviceEvent", "EventBatch", "TrainArrived", "WheelMarks"} <= schemas.keys()
+    body = document["paths"]["/api/v1/events"]["post"]["requestBody"]
+    assert "DeviceEvent" in str(body)
