@@ -44,14 +44,22 @@ def bench_database(name: str) -> str:
 def serve(database_url: str, *, workers: int = 2) -> Iterator[str]:
     """Migrate, start ``depot serve`` and yield its base URL; the server is killed afterwards."""
     data_dir = tempfile.mkdtemp(prefix="depot-bench-")
-    env = {**os.environ, "DEPOT_DATABASE_URL": database_url, "DEPOT_DATA_DIR": data_dir,
-           "DEPOT_ADMIN_TOKEN": ADMIN_TOKEN, "DEPOT_ENVIRONMENT": "test"}
+    env = {
+        **os.environ,
+        "DEPOT_DATABASE_URL": database_url,
+        "DEPOT_DATA_DIR": data_dir,
+        "DEPOT_ADMIN_TOKEN": ADMIN_TOKEN,
+        "DEPOT_ENVIRONMENT": "test",
+    }
     depot = str(Path(sys.executable).parent / "depot")
     subprocess.run([depot, "migrate"], env=env, check=True, capture_output=True)
     port = free_port()
     log = open(Path(data_dir) / "server.log", "w")  # noqa: SIM115 - closed below
     process = subprocess.Popen(
-        [depot, "serve", "--port", str(port), "--workers", str(workers)], env=env, stdout=log, stderr=log
+        [depot, "serve", "--port", str(port), "--workers", str(workers)],
+        env=env,
+        stdout=log,
+        stderr=log,
     )
     url = f"http://127.0.0.1:{port}"
     try:
