@@ -150,7 +150,8 @@ async def post_snapshot(
     }
     device = principal.device
     assert device is not None
-    # The file goes to disk first: a stored event never points at a missing image.
+    event = await run_in_threadpool(service.validate_snapshot, session, device, payload)
+    # The file goes to disk before the event: a stored event never points at a missing image.
     await run_in_threadpool(store_image, settings.image_dir, checked, data)
-    status, result = await run_in_threadpool(service.accept_snapshot, session, device, payload)
+    status, result = await run_in_threadpool(service.store_event, session, device, event, payload)
     return JSONResponse(result, status_code=status)

@@ -10,6 +10,7 @@ from typing import Any
 from pydantic import ValidationError
 from sqlalchemy import select
 from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.exc import InterfaceError, OperationalError, PendingRollbackError
 from sqlalchemy.orm import Session
 
 from ingest.handlers import HANDLERS, Derivation, derive
@@ -133,6 +134,8 @@ def run_derivation(
     try:
         with session.begin_nested():
             return derive(derivation)
+    except (OperationalError, InterfaceError, PendingRollbackError):
+        raise  # the database itself failed: nothing is acknowledged, the device retries
     except Exception as exc:  # noqa: BLE001 - the raw event is kept; the fault is recorded
         log.exception("deriving from %s/%s failed", device.id, raw.event_id)
         raw.derive_error = f"{type(exc).__name__}: {exc}"
@@ -254,10 +257,8 @@ def accept_batch(session: Session, device: Device, items: list[Any]) -> list[dic
     return [r for r in results if r is not None]
 
 
-def accept_snapshot(
-    session: Session, device: Device, payload: dict[str, Any]
-) -> tuple[int, dict[str, Any]]:
-    """Store the event of an uploaded (already checked and written) tail-car image."""
+def validate_snapshot(session: Session, device: Device, payload: dict[str, Any]) -> TailSnapshot:
+    """Validate the event of an uploaded tail-car image before anything is written."""
     try:
         event = TailSnapshot.model_validate(payload)
     except ValidationError as exc:
@@ -266,4 +267,4 @@ def accept_snapshot(
         raise Unprocessable(f"invalid snapshot: {fields}", errors=errors) from None
     check_device_may_send(device, event.kind)
     check_section(session, device, event.section)
-    return store_event(session, device, event, payload)
+    return event

@@ -20,6 +20,7 @@ from service.health import router as health_router
 from service.review.router import router as review_router
 from service.settings import get_settings
 from service.setup.router import router as setup_router
+from service.trains.router import router as trains_router
 
 API = "/api/v1"
 
@@ -39,8 +40,50 @@ def _openapi(app: FastAPI) -> dict[str, Any]:
     batch_schema = EventBatch.model_json_schema(ref_template=ref)
     components.update(batch_schema.pop("$defs", {}))
     components["EventBatch"] = batch_schema
+    components["Problem"] = PROBLEM_SCHEMA
+    for path, operations in schema["paths"].items():
+        if path.startswith(API):
+            for operation in operations.values():
+                _document_problems(operation)
     app.openapi_schema = schema
     return schema
+
+
+PROBLEM_SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "required": ["type", "title", "status", "detail"],
+    "properties": {
+        "type": {"type": "string"},
+        "title": {"type": "string"},
+        "status": {"type": "integer"},
+        "detail": {"type": "string"},
+        "errors": {
+            "type": "array",
+            "items": {
+                "type": "object",
+                "properties": {"loc": {"type": "array"}, "msg": {"type": "string"}},
+            },
+        },
+    },
+}
+PROBLEMS = {
+    "401": "missing or unknown credentials",
+    "403": "the role or device kind may not do this",
+    "404": "not found",
+    "409": "conflict with the stored state",
+    "413": "too large",
+    "415": "unsupported media type",
+    "422": "invalid request",
+    "503": "the database is unreachable; retry after Retry-After seconds",
+}
+
+
+def _document_problems(operation: dict[str, Any]) -> None:
+    """Every error is ``application/problem+json``; say so for each operation."""
+    content = {"application/problem+json": {"schema": {"$ref": "#/components/schemas/Problem"}}}
+    responses = operation.setdefault("responses", {})
+    for status, description in PROBLEMS.items():
+        responses[status] = {"description": description, "content": content}
 
 
 def create_app() -> FastAPI:
@@ -65,5 +108,6 @@ def create_app() -> FastAPI:
     app.include_router(review_router)
     app.include_router(fleet_router, prefix=API)
     app.include_router(fleet_review_router)
+    app.include_router(trains_router, prefix=API)
     app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]
     return app

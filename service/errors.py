@@ -8,7 +8,7 @@ from typing import Any
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
-from sqlalchemy.exc import OperationalError
+from sqlalchemy.exc import DataError, InterfaceError, OperationalError, PendingRollbackError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 PROBLEM_JSON = "application/problem+json"
@@ -103,12 +103,19 @@ def install_error_handlers(app: FastAPI) -> None:
             exc.status_code, str(exc.detail), str(exc.detail), headers=dict(exc.headers or {})
         )
 
-    @app.exception_handler(OperationalError)
-    async def _database_down(_: Request, exc: OperationalError) -> JSONResponse:
-        log.warning("database unavailable: %s", type(exc.orig).__name__)
+    async def _database_down(_: Request, exc: Exception) -> JSONResponse:
+        log.warning("database unavailable: %s", type(exc).__name__)
         return problem(
             503,
             "Service unavailable",
             "the database is unreachable; retry later",
             headers={"Retry-After": "5"},
         )
+
+    for failure in (OperationalError, InterfaceError, PendingRollbackError):
+        app.add_exception_handler(failure, _database_down)
+
+    @app.exception_handler(DataError)
+    async def _bad_value(_: Request, exc: DataError) -> JSONResponse:
+        # e.g. a NUL character or an out-of-range number in an identifier
+        return problem(422, "Unprocessable content", "a value cannot be stored or looked up")

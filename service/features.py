@@ -3,6 +3,8 @@
 from service.clearance import handlers as clearance_handlers
 from service.clearance import tail as clearance_tail
 from service.fleet import handlers as fleet_handlers
+from service.trains import handlers as train_handlers
 
 LOADED = (clearance_handlers, clearance_tail)
 LOADED_FLEET = (fleet_handlers,)
+LOADED_TRAINS = (train_handlers,)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Query
+from fastapi import APIRouter, Path, Query
 from fastapi.responses import FileResponse, Response
 from sqlalchemy import or_, select
 
@@ -22,6 +22,9 @@ from service.errors import NotFound
 from service.setup.models import Section
 
 router = APIRouter(tags=["dispatcher"])
+MAX_ROW_ID = 2**63 - 1
+RunId = Annotated[int, Path(ge=1, le=MAX_ROW_ID, description="run id")]
+SnapshotId = Annotated[int, Path(ge=1, le=MAX_ROW_ID, description="snapshot id")]
 
 
 @router.get("/sections")
@@ -46,7 +49,9 @@ def list_runs(
         str | None, Query(description="running, arrived, conflict, or a verdict")
     ] = None,
     limit: Annotated[int, Query(ge=1, le=500)] = 50,
-    cursor: Annotated[int | None, Query(description="next_cursor of the previous page")] = None,
+    cursor: Annotated[
+        int | None, Query(ge=1, le=MAX_ROW_ID, description="next_cursor of the previous page")
+    ] = None,
 ) -> dict[str, Any]:
     query = select(Run).order_by(Run.id.desc()).limit(limit + 1)
     if section:
@@ -64,7 +69,7 @@ def list_runs(
 
 
 @router.get("/runs/{run_id}")
-def get_run(run_id: int, session: DbSession, _: CurrentReader) -> dict[str, Any]:
+def get_run(run_id: RunId, session: DbSession, _: CurrentReader) -> dict[str, Any]:
     run = session.get(Run, run_id)
     if run is None:
         raise NotFound(f"run {run_id} does not exist")
@@ -75,7 +80,7 @@ def get_run(run_id: int, session: DbSession, _: CurrentReader) -> dict[str, Any]
     "/runs/{run_id}/decision", responses={409: {"description": "not current or not arrived"}}
 )
 def decide_run(
-    run_id: int, body: DecisionIn, session: DbSession, who: CurrentDispatcher
+    run_id: RunId, body: DecisionIn, session: DbSession, who: CurrentDispatcher
 ) -> dict[str, Any]:
     record = service.act(session, run_id, body.action, body.reason, who, utcnow())
     run = session.get_one(Run, run_id)
@@ -91,7 +96,7 @@ def decide_run(
 def list_audit(
     session: DbSession,
     _: CurrentReader,
-    run: int | None = None,
+    run: Annotated[int | None, Query(ge=1, le=MAX_ROW_ID)] = None,
     limit: Annotated[int, Query(ge=1, le=1000)] = 200,
 ) -> list[dict[str, Any]]:
     query = select(AuditRecord).order_by(AuditRecord.id.desc()).limit(limit)
@@ -108,7 +113,7 @@ def _snapshot(session: DbSession, snapshot_id: int) -> Snapshot:
 
 
 @router.get("/snapshots/{snapshot_id}", response_class=FileResponse)
-def get_snapshot_image(snapshot_id: int, session: DbSession, _: CurrentReader) -> Any:
+def get_snapshot_image(snapshot_id: SnapshotId, session: DbSession, _: CurrentReader) -> Any:
     snapshot = _snapshot(session, snapshot_id)
     return FileResponse(
         snapshot_file(snapshot),
@@ -118,7 +123,9 @@ def get_snapshot_image(snapshot_id: int, session: DbSession, _: CurrentReader) -
 
 
 @router.get("/snapshots/{snapshot_id}/meta")
-def get_snapshot_meta(snapshot_id: int, session: DbSession, _: CurrentReader) -> dict[str, Any]:
+def get_snapshot_meta(
+    snapshot_id: SnapshotId, session: DbSession, _: CurrentReader
+) -> dict[str, Any]:
     s = _snapshot(session, snapshot_id)
     return {
         "id": s.id,
@@ -141,7 +148,7 @@ def get_snapshot_meta(snapshot_id: int, session: DbSession, _: CurrentReader) ->
     response_class=Response,
     responses={200: {"content": {"image/png": {}}}},
 )
-def get_snapshot_overlay(snapshot_id: int, session: DbSession, _: CurrentReader) -> Response:
+def get_snapshot_overlay(snapshot_id: SnapshotId, session: DbSession, _: CurrentReader) -> Response:
     snapshot = _snapshot(session, snapshot_id)
     image = load_bgr(snapshot_file(snapshot))
     profile = camera_profile(snapshot.device_id)

@@ -5,22 +5,53 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import JSON, Float, ForeignKey, Integer, String, Text
+import numpy as np
+from sqlalchemy import JSON, Float, ForeignKey, Index, Integer, LargeBinary, String, Text
 from sqlalchemy.orm import Mapped, mapped_column
 
 from ingest.models import BigId
 from service.database import Base, UTCDateTime, utcnow
 
+# A test's values in the order of its layout's names, as little-endian float64 bytes (numpy
+# reads them without parsing; PostgreSQL concatenates a car's tests with string_agg). Read and
+# write them with service.fleet.service (measured_values, measurement_row) or encode_readings.
+READINGS_DTYPE = "<f8"
+
+
+def encode_readings(values: Any) -> bytes:
+    return bytes(np.asarray(values, dtype=READINGS_DTYPE).tobytes())
+
+
+def decode_readings(data: bytes) -> list[float]:
+    return list(np.frombuffer(data, dtype=READINGS_DTYPE).tolist())
+
+
+class MeasurementLayout(Base):
+    """The parameters measured at a test, in the order its readings are stored (names sorted).
+
+    Cars tested on the same bench share one layout, so the fleet's tests are stored as plain
+    float arrays without repeating the names.
+    """
+
+    __tablename__ = "measurement_layouts"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    key: Mapped[str] = mapped_column(String(64), unique=True)  # sha256 of the names (lookup)
+    names: Mapped[list[str]] = mapped_column(JSON)
+
 
 class Measurement(Base):
+    """One test of a car: every value measured at ``taken_at``, in its layout's order."""
+
     __tablename__ = "measurements"
+    __table_args__ = (Index("ix_measurements_car_id_taken_at", "car_id", "taken_at"),)
 
     id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
-    car_id: Mapped[str] = mapped_column(ForeignKey("cars.id"), index=True)
+    car_id: Mapped[str] = mapped_column(ForeignKey("cars.id"))
     taken_at: Mapped[datetime] = mapped_column(UTCDateTime(), index=True)
-    parameter: Mapped[str] = mapped_column(String(64))
-    value: Mapped[float] = mapped_column(Float)
-    # Set when the value came from a device event; such rows are rebuilt by replay.
+    layout_id: Mapped[int] = mapped_column(ForeignKey("measurement_layouts.id"))
+    readings: Mapped[bytes] = mapped_column(LargeBinary)
+    # Set when the test came from a device event; such rows are rebuilt by replay.
     raw_event_id: Mapped[int | None] = mapped_column(BigId, nullable=True, index=True)
     source: Mapped[str] = mapped_column(String(32), default="api")
 

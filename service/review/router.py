@@ -5,12 +5,19 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Form, Request
+from fastapi import APIRouter, Form, Query, Request
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from fastapi.templating import Jinja2Templates
 
 from service.auth import Principal, person_for_token
 from service.clearance import service as clearance
+from service.clearance.router import (
+    MAX_ROW_ID,
+    RunId,
+    SnapshotId,
+    get_snapshot_image,
+    get_snapshot_overlay,
+)
 from service.database import DbSession, utcnow
 from service.errors import DepotError
 from service.review.service import STATE_WORDS, aligned_rows, build_screen
@@ -63,7 +70,10 @@ def logout() -> Response:
 
 @router.get("/review", response_class=HTMLResponse)
 def review(
-    request: Request, session: DbSession, run: int | None = None, notice: str | None = None
+    request: Request,
+    session: DbSession,
+    run: Annotated[int | None, Query(ge=1, le=MAX_ROW_ID)] = None,
+    notice: str | None = None,
 ) -> Response:
     who = _who(request, session)
     if who is None:
@@ -84,7 +94,7 @@ def review(
 def decide(
     request: Request,
     session: DbSession,
-    run_id: int,
+    run_id: RunId,
     action: Annotated[str, Form()],
     reason: Annotated[str, Form()] = "",
 ) -> Response:
@@ -107,10 +117,10 @@ def decide(
 
 
 @router.get("/review/snapshots/{snapshot_id}/{which}")
-def snapshot_image(request: Request, session: DbSession, snapshot_id: int, which: str) -> Response:
+def snapshot_image(
+    request: Request, session: DbSession, snapshot_id: SnapshotId, which: str
+) -> Response:
     """Images for the screen, behind the screen's own login cookie."""
-    from service.clearance.router import get_snapshot_image, get_snapshot_overlay
-
     who = _who(request, session)
     if who is None:
         return Response(status_code=401)

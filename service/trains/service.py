@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from sqlalchemy import select
+from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
 from motion.fusion import FilterConfig, Marker, MarkerTable, TrackFilter
@@ -40,11 +41,21 @@ def add_marker(session: Session, data: MarkerIn) -> TrackMarker:
 
 def feed(session: Session, train: str, sample: dict[str, Any], at: Any) -> dict[str, Any]:
     """Advance the train's filter by one ``motion_sample``; returns the new state."""
-    row = session.scalar(
-        select(TrainPosition).where(TrainPosition.train == train).with_for_update()
+    # Create the train's row race-free (two units may start the same train), then lock it.
+    module = postgresql if session.get_bind().dialect.name == "postgresql" else sqlite
+    session.execute(
+        module.insert(TrainPosition)
+        .values(train=train, updated_at=at, state={}, filter_state={})
+        .on_conflict_do_nothing(index_elements=["train"])
     )
+    row = session.scalars(
+        select(TrainPosition)
+        .where(TrainPosition.train == train)
+        .with_for_update()
+        .execution_options(populate_existing=True)
+    ).one()
     table = marker_table(session)
-    if row is None or not row.filter_state:
+    if not row.filter_state:
         track_filter = TrackFilter(table, FilterConfig())
     else:
         try:
@@ -53,9 +64,6 @@ def feed(session: Session, train: str, sample: dict[str, Any], at: Any) -> dict[
             # The marker table changed since the filter started: start again from it.
             track_filter = TrackFilter(table, FilterConfig())
     state = track_filter.update(sample).as_dict()
-    if row is None:
-        row = TrainPosition(train=train)
-        session.add(row)
     row.updated_at, row.state, row.filter_state = at, state, track_filter.to_dict()
     session.flush()
     return state
@@ -63,6 +71,6 @@ def feed(session: Session, train: str, sample: dict[str, Any], at: Any) -> dict[
 
 def position(session: Session, train: str) -> dict[str, Any]:
     row = session.get(TrainPosition, train)
-    if row is None:
+    if row is None or not row.state:
         raise NotFound(f"no motion samples received for train {train!r}")
     return {"train": train, "updated_at": row.updated_at.isoformat(), **row.state}

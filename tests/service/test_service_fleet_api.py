@@ -10,7 +10,9 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from ingest.models import RawEvent
-from service.fleet.models import MaintenanceOverride, Measurement
+from service.fleet.models import MaintenanceOverride, Measurement, decode_readings
+from service.fleet.service import measured_values
+from service.replay import replay
 from service.setup.service import create_user
 from tests.conftest import ADMIN
 from tests.service.linekit import build_line, event
@@ -51,12 +53,11 @@ def test_engineer_posts_measurements(
     response = _measure(client, engineer, values={"door_close_s": 2.5, "brake_release_s": 4.1})
     assert response.status_code == 201, response.text
     assert response.json()["measurements"] == 2
-    rows = session.scalars(select(Measurement).where(Measurement.car_id == "0117")).all()
-    assert {(r.parameter, r.value, r.source) for r in rows} == {
-        ("door_close_s", 2.5, "api"),
-        ("brake_release_s", 4.1, "api"),
-    }
-    assert all(r.taken_at == T0 and r.raw_event_id is None for r in rows)
+    # one row per test, its values in the layout's (sorted) parameter order
+    (row,) = session.scalars(select(Measurement).where(Measurement.car_id == "0117")).all()
+    assert decode_readings(row.readings) == [4.1, 2.5] and row.source == "api"
+    assert measured_values(session, row) == {"door_close_s": 2.5, "brake_release_s": 4.1}
+    assert row.taken_at == T0 and row.raw_event_id is None
 
 
 def test_measurement_access_and_validation(
@@ -85,15 +86,29 @@ def test_bench_measurement_event_is_stored_with_its_raw_event(
     assert response.json()["measurements"] == 1
     raw = session.scalar(select(RawEvent).where(RawEvent.event_id == "D-bench-3310"))
     row = session.scalar(select(Measurement).where(Measurement.raw_event_id == raw.id))
-    assert (row.car_id, row.parameter, row.value, row.source) == (
+    assert (row.car_id, measured_values(session, row), row.source) == (
         "0117",
-        "door_close_s",
-        2.6,
+        {"door_close_s": 2.6},
         "event",
     )
     again = client.post("/api/v1/events", json=body, headers=keys["D-bench"])
     assert again.status_code == 200  # a retry stores nothing twice
     assert len(session.scalars(select(Measurement)).all()) == 1
+
+
+def test_replay_rebuilds_event_tests_and_keeps_the_others(
+    keys: dict, client: TestClient, session: Session, engineer: dict
+) -> None:
+    body = event("D-bench-3312", "measurement", car="0117", values={"door_close_s": 2.7})
+    assert client.post("/api/v1/events", json=body, headers=keys["D-bench"]).status_code == 201
+    assert _measure(client, engineer, values={"brake_release_s": 4.3}).status_code == 201
+    replay(session)
+    rows = session.scalars(select(Measurement).order_by(Measurement.source)).all()
+    assert [(r.source, measured_values(session, r)) for r in rows] == [
+        ("api", {"brake_release_s": 4.3}),
+        ("event", {"door_close_s": 2.7}),
+    ]
+    assert rows[1].raw_event_id is not None
 
 
 def test_measurement_event_for_unknown_car_warns_and_keeps_the_raw_event(

@@ -11,9 +11,17 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from service.fleet.demo import demo_fleet, load_fleet_history, register_parameters
-from service.fleet.history import pivot
-from service.fleet.models import Forecast, Measurement
+from service.fleet.forecasts import (
+    ForecastOptions,
+    assess,
+    assessed,
+    calibrate_fleet_index,
+    forecast_row,
+)
+from service.fleet.history import Block, Columns, car_history, histories, load_bands
+from service.fleet.models import Forecast, Measurement, decode_readings
 from service.fleet.service import record_measurements
+from service.fleet.vectorised import batch_assessments
 from tests.conftest import ADMIN
 from tests.service.linekit import build_line, post_ok
 
@@ -64,7 +72,8 @@ def test_generated_fleet_ranks_drifting_cars_first(client: TestClient, session: 
     # the cars of the line without measurements come last, without a risk
     assert [c["status"] for c in loaded["cars"][-4:]] == ["not_enough_history"] * 4
     stored = session.scalars(select(Measurement).where(Measurement.car_id == FLEET[0])).all()
-    assert len(stored) == 100 * len(truth.names)
+    assert len(stored) == 100  # one row per test
+    assert all(len(decode_readings(m.readings)) == len(truth.names) for m in stored)
     assert {m.source for m in stored} == {"event"} and all(m.raw_event_id for m in stored)
 
 
@@ -120,17 +129,82 @@ def test_chart_is_a_png(stored: list[str], client: TestClient) -> None:
     assert image.shape[:2] == (300, 760)
 
 
-def test_pivot_carries_skipped_values_and_drops_rare_parameters() -> None:
-    t = [datetime(2026, 1, d, tzinfo=UTC) for d in range(1, 6)]
-    rows = [(t[0], "a", 1.0), (t[0], "b", 5.0), (t[1], "a", 2.0), (t[2], "a", 3.0)]
-    rows += [(t[2], "b", 6.0), (t[3], "b", 7.0), (t[4], "a", 4.0), (t[4], "a", 4.5)]
-    rows += [(t[4], "c", 9.0)]
-    history = pivot("0117", rows, ["a", "b", "c"])
-    assert history.names == ("a", "b")  # c measured once in five tests
-    assert history.taken_at == t
+def _blocks_of(tests: list[tuple[int, int, tuple[str, ...], list[float]]]) -> list[Block]:
+    """Blocks (one per layout) of tests ``(day, id, names, readings)``."""
+    out = []
+    for names in dict.fromkeys(names for _, _, names, _ in tests):
+        mine = [t for t in tests if t[2] == names]
+        epoch = [datetime(2026, 1, day, tzinfo=UTC).timestamp() for day, *_ in mine]
+        out.append(Block(LAYOUTS.index(names), np.array(epoch), np.array([t[1] for t in mine]),
+                         np.array([t[3] for t in mine])))  # fmt: skip
+    return out
+
+
+LAYOUTS = [("a", "b"), ("a",), ("b",), ("a", "c"), ("x",)]
+
+
+def test_history_carries_skipped_values_and_drops_rare_parameters() -> None:
+    names = ["a", "b", "c"]
+    columns = {
+        0: Columns([0, 1], [0, 1]), 1: Columns([0], [0]), 2: Columns([0], [1]),
+        3: Columns([0, 1], [0, 2]),
+    }  # fmt: skip
+    tests = [(1, 1, ("a", "b"), [1.0, 5.0]), (2, 2, ("a",), [2.0]), (3, 3, ("a", "b"), [3.0, 6.0])]
+    tests += [(4, 4, ("b",), [7.0]), (5, 5, ("a",), [4.0]), (5, 6, ("a", "c"), [4.5, 9.0])]
+    tests += [(5, 7, ("x",), [0.0])]  # a layout without banded parameters
+    history = car_history("0117", _blocks_of(tests), columns, names)
+    assert history is not None and history.names == ("a", "b")  # c measured once in five tests
+    assert history.taken_at == [datetime(2026, 1, d, tzinfo=UTC) for d in range(1, 6)]
     np.testing.assert_allclose(
         history.values, [[1, 5], [2, 5], [3, 6], [3, 7], [4.5, 7]]
     )  # skipped values carried forward; a repeated measurement keeps the later value
+    single = car_history("0118", _blocks_of(tests[:1] + tests[2:3]), columns, names)
+    assert single is not None and single.names == ("a", "b")
+    np.testing.assert_array_equal(single.values, [[1, 5], [3, 6]])
+    assert car_history("0119", _blocks_of(tests[-1:]), columns, names) is None
+
+
+def test_stored_histories_read_in_bulk(client: TestClient, session: Session) -> None:
+    """Ragged storage (several layouts, a repeated time) reads the same on every database."""
+    build_line(client)
+    for name in ("a", "b", "c"):
+        body = {"name": name, "nominal": 1.0, "tolerance": 0.5}
+        post_ok(client, "/api/v1/maintenance/parameters", body)
+    t = [END - timedelta(days=5 - d, microseconds=250_000) for d in range(5)]
+    ragged = [(t[0], {"a": 1.0, "b": 5.0}), (t[1], {"a": 2.0}), (t[2], {"b": 6.0, "a": 3.0})]
+    ragged += [(t[3], {"b": 7.0, "z": 0.0}), (t[4], {"a": 4.0}), (t[4], {"a": 4.5, "c": 9.0})]
+    for at, values in ragged:
+        record_measurements(session, "0117", at, values, source="api")
+    for at, values in ragged[:3:2]:
+        record_measurements(session, "0118", at, values, source="api")
+    record_measurements(session, "0119", t[0], {"z": 1.0}, source="api")  # no banded parameter
+    session.flush()
+    read = {h.car_id: h for h in histories(session, load_bands(session).names)}
+    assert sorted(read) == ["0117", "0118"]
+    assert read["0117"].names == ("a", "b") and read["0117"].taken_at == t
+    np.testing.assert_allclose(read["0117"].values, [[1, 5], [2, 5], [3, 6], [3, 7], [4.5, 7]])
+    assert read["0118"].names == ("a", "b") and read["0118"].taken_at == [t[0], t[2]]
+    np.testing.assert_array_equal(read["0118"].values, [[1, 5], [3, 6]])
+
+
+def test_vectorised_assessment_equals_per_car(stored: list[str], session: Session) -> None:
+    bands, options = load_bands(session), ForecastOptions()
+    read = list(histories(session, bands.names))
+    fleet = calibrate_fleet_index(read, bands, options)
+    assert fleet.calibrated and len(read) == len(stored)
+    batch = batch_assessments(read, bands, fleet, order=2, horizon=30, failure_k=2)
+    assert sorted(batch) == list(range(len(read)))
+    for i, history in enumerate(read):
+        got, (want, _) = batch[i].to_dict(), assess(history, bands, fleet, options)
+        want_d = want.to_dict()
+        assert got["reasons"] == want_d["reasons"] and got["first_exit"] == want_d["first_exit"]
+        for key in ("risk", "k_of_l_probability", "times", "index"):
+            np.testing.assert_allclose(got[key], want_d[key], rtol=1e-9, atol=1e-12)
+        for key in ("times", "values", "lower", "upper"):
+            np.testing.assert_allclose(got["forecast"][key], want_d["forecast"][key], rtol=1e-9)
+        rows = [forecast_row(history, bands, fleet, options, END, o) for o in
+                (assessed(batch[i], fleet.note), None)]  # fmt: skip
+        assert rows[0]["payload"]["reasons"] == rows[1]["payload"]["reasons"]
 
 
 def test_review_fleet_page_behind_login(stored: list[str], client: TestClient) -> None:

@@ -1,0 +1,30 @@
+"""Derivation of the maintenance feature: ``measurement`` events become measurement rows."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ingest.handlers import Derivation, handles
+from service.fleet.service import record_measurements
+from service.setup.models import Car
+
+
+@handles("measurement")
+def _measured(d: Derivation) -> dict[str, Any]:
+    car_id = d.event.car
+    if d.session.get(Car, car_id) is None:
+        # The raw event is kept (replay derives it again once the car is registered).
+        return {
+            "car": car_id,
+            "measurements": 0,
+            "warning": f"car {car_id!r} is not registered; register it with POST /api/v1/cars",
+        }
+    stored = record_measurements(
+        d.session,
+        car_id,
+        d.event.occurred_at,
+        d.event.values,
+        source="event",
+        raw_event_id=d.raw.id,
+    )
+    return {"car": car_id, "measurements": stored}

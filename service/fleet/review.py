@@ -1,0 +1,76 @@
+"""The fleet ranking page (``/review/fleet``), behind the review screen's login cookie."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Form, Request
+from fastapi.responses import HTMLResponse, RedirectResponse, Response
+
+from service.database import DbSession, utcnow
+from service.errors import DepotError
+from service.fleet import service, views
+from service.fleet.chart import cached_chart
+from service.review.router import _who, templates
+
+router = APIRouter(tags=["review screen"], include_in_schema=False)
+DECIDERS = ("engineer", "admin")
+ACTION_WORDS = {"keep_in_service": "kept in service", "withdraw_now": "withdrawn now"}
+ADVICE_WORDS = {
+    "plan_withdrawal": "plan withdrawal",
+    "watch": "watch",
+    "serviceable": "serviceable",
+    "unknown": "not enough history",
+    **ACTION_WORDS,
+}
+
+
+@router.get("/review/fleet", response_class=HTMLResponse)
+def fleet_page(request: Request, session: DbSession, notice: str | None = None) -> Response:
+    who = _who(request, session)
+    if who is None:
+        return RedirectResponse("/review/login", status_code=303)
+    context: dict[str, Any] = {
+        "who": who,
+        "fleet": views.fleet_out(session),
+        "notice": notice,
+        "may_decide": who.role in DECIDERS,
+        "advice_words": ADVICE_WORDS,
+    }
+    return templates.TemplateResponse(request, "fleet.html", context)
+
+
+@router.get("/review/fleet/cars/{car_id}/forecast.png")
+def fleet_chart(request: Request, session: DbSession, car_id: str) -> Response:
+    """The car's chart for the page, behind the page's own login cookie."""
+    if _who(request, session) is None:
+        return Response(status_code=401)
+    forecast = views.latest_forecast(session, car_id)
+    if forecast is None:
+        return Response(status_code=404)
+    key = (forecast.id, forecast.car_id, forecast.computed_at.isoformat())
+    png = cached_chart(key, views.forecast_out(session, forecast))
+    return Response(png, media_type="image/png", headers={"Cache-Control": "private, max-age=60"})
+
+
+@router.post("/review/fleet/cars/{car_id}/decision")
+def fleet_decide(
+    request: Request,
+    session: DbSession,
+    car_id: str,
+    action: Annotated[str, Form()],
+    reason: Annotated[str, Form()] = "",
+) -> Response:
+    who = _who(request, session)
+    if who is None or who.role not in DECIDERS:
+        return RedirectResponse("/review/login", status_code=303)
+    if action not in ACTION_WORDS or len(reason.strip()) < 3:
+        notice = "Give a reason of at least 3 characters."
+    else:
+        try:
+            service.record_override(session, car_id, action, reason.strip(), who, utcnow())
+            notice = f"Car {car_id}: {ACTION_WORDS[action]}."
+        except DepotError as exc:
+            notice = exc.detail
+    url = request.url_for("fleet_page").include_query_params(notice=notice)
+    return RedirectResponse(f"{url}#car-{car_id}", status_code=303)

@@ -1,0 +1,64 @@
+"""Request bodies of the maintenance API (responses are built in :mod:`service.fleet.views`)."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, field_validator
+
+ParameterName = Annotated[
+    str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+]
+# "fisher" separates serviceable from faulty tests, so it works only when the fleet calibration
+# finds faulty tests in the stored history (422 otherwise).
+WeightsMethod = Literal["prediction", "inverse_variance", "rayleigh", "equal", "fisher"]
+WEIGHTS_METHODS: tuple[str, ...] = ("prediction", "inverse_variance", "rayleigh", "equal", "fisher")
+
+
+class StrictModel(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class MeasurementIn(StrictModel):
+    taken_at: AwareDatetime
+    values: Annotated[
+        dict[Annotated[str, Field(min_length=1, max_length=64)], float],
+        Field(min_length=1, max_length=200),
+    ]
+
+    @field_validator("values")
+    @classmethod
+    def _finite(cls, values: dict[str, float]) -> dict[str, float]:
+        bad = [name for name, value in values.items() if not math.isfinite(value)]
+        if bad:
+            raise ValueError(f"values must be finite numbers: {', '.join(bad)}")
+        return values
+
+
+class ParameterIn(StrictModel):
+    """A measured parameter and its tolerance band ``nominal ± tolerance``."""
+
+    name: ParameterName
+    nominal: Annotated[float, Field(allow_inf_nan=False)]
+    tolerance: Annotated[float, Field(gt=0, allow_inf_nan=False)]
+    unit: Annotated[str, Field(max_length=16)] = ""
+    description: Annotated[str, Field(max_length=2000)] = ""
+
+
+class ForecastRunIn(StrictModel):
+    method: WeightsMethod = "prediction"
+    horizon: Annotated[int, Field(ge=1, le=365, description="forecast steps")] = 30
+    order: Annotated[int, Field(ge=1, le=10, description="AR order of the index")] = 2
+
+
+class MaintenanceDecisionIn(StrictModel):
+    action: Literal["keep_in_service", "withdraw_now"]
+    reason: Annotated[str, Field(min_length=3, max_length=2000)]
+
+    @field_validator("reason")
+    @classmethod
+    def _meaningful(cls, reason: str) -> str:
+        if len(reason.strip()) < 3:
+            raise ValueError("give a reason of at least 3 characters")
+        return reason.strip()

@@ -1,0 +1,168 @@
+"""Maintenance records: measurements, parameter bands, engineers' overrides.
+
+Services flush; the request (or CLI command) owns the transaction.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Mapping, Sequence
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import insert, select
+from sqlalchemy.dialects.postgresql import insert as pg_insert
+from sqlalchemy.dialects.sqlite import insert as sqlite_insert
+from sqlalchemy.orm import Session
+
+from service.auth import Principal
+from service.errors import Conflict, NotFound
+from service.fleet.models import (
+    MaintenanceOverride,
+    Measurement,
+    MeasurementLayout,
+    Parameter,
+    decode_readings,
+    encode_readings,
+)
+from service.fleet.schemas import ParameterIn
+from service.setup.models import Car
+
+
+def require_car(session: Session, car_id: str) -> Car:
+    car = session.get(Car, car_id)
+    if car is None:
+        raise NotFound(f"car {car_id!r} does not exist; register it with POST /api/v1/cars")
+    return car
+
+
+def layout_key(names: Sequence[str]) -> str:
+    return hashlib.sha256(json.dumps(list(names)).encode()).hexdigest()
+
+
+def layout_id(session: Session, names: Sequence[str], known: dict[str, int] | None = None) -> int:
+    """The id of the layout of ``names`` (sorted), created when new; ``known`` caches keys."""
+    key = layout_key(names)
+    if known is not None and key in known:
+        return known[key]
+    query = select(MeasurementLayout.id).where(MeasurementLayout.key == key)
+    found = session.scalar(query)
+    if found is None:
+        # Concurrent requests may create the same layout: the unique key keeps one of them.
+        dialect = session.get_bind().dialect.name
+        make = pg_insert if dialect == "postgresql" else sqlite_insert
+        session.execute(
+            make(MeasurementLayout)
+            .values(key=key, names=list(names))
+            .on_conflict_do_nothing(index_elements=["key"])
+        )
+        found = session.scalars(query).one()
+    if known is not None:
+        known[key] = found
+    return int(found)
+
+
+def measurement_row(
+    session: Session,
+    car_id: str,
+    taken_at: datetime,
+    values: Mapping[str, float],
+    *,
+    source: str,
+    raw_event_id: int | None = None,
+    known: dict[str, int] | None = None,
+) -> dict[str, Any]:
+    """The Measurement row (insert values) of one test: its values in sorted-name order."""
+    names = sorted(values)
+    return {
+        "car_id": car_id,
+        "taken_at": taken_at,
+        "layout_id": layout_id(session, names, known),
+        "readings": encode_readings([values[n] for n in names]),
+        "raw_event_id": raw_event_id,
+        "source": source,
+    }
+
+
+def record_measurements(
+    session: Session,
+    car_id: str,
+    taken_at: datetime,
+    values: Mapping[str, float],
+    *,
+    source: str,
+    raw_event_id: int | None = None,
+) -> int:
+    """Store one test of a car (one row); returns the number of values."""
+    row = measurement_row(
+        session, car_id, taken_at, values, source=source, raw_event_id=raw_event_id
+    )
+    # Core insert (the ORM unit of work costs more than the row itself here).
+    session.connection().execute(insert(Measurement), [row])
+    return len(values)
+
+
+def measured_values(session: Session, test: Measurement) -> dict[str, float]:
+    """A stored test's values by parameter name."""
+    layout = session.get_one(MeasurementLayout, test.layout_id)
+    return dict(zip(layout.names, decode_readings(test.readings), strict=True))
+
+
+def list_parameters(session: Session) -> list[Parameter]:
+    return list(session.scalars(select(Parameter).order_by(Parameter.name)))
+
+
+def create_parameter(session: Session, data: ParameterIn) -> Parameter:
+    if session.get(Parameter, data.name) is not None:
+        raise Conflict(
+            f"parameter {data.name!r} already exists; change its band with"
+            f" PUT /api/v1/maintenance/parameters/{data.name}"
+        )
+    parameter = Parameter(**data.model_dump())
+    session.add(parameter)
+    session.flush()
+    return parameter
+
+
+def update_parameter(session: Session, name: str, data: ParameterIn) -> Parameter:
+    parameter = session.get(Parameter, name)
+    if parameter is None:
+        raise NotFound(f"parameter {name!r} does not exist; create it with POST first")
+    if data.name != name:
+        raise Conflict(f"the body names parameter {data.name!r}, the path {name!r}")
+    for field, value in data.model_dump().items():
+        setattr(parameter, field, value)
+    session.flush()
+    return parameter
+
+
+def record_override(
+    session: Session, car_id: str, action: str, reason: str, actor: Principal, at: datetime
+) -> MaintenanceOverride:
+    """An engineer's decision on a car's forecast; append-only, it is the audit trail."""
+    require_car(session, car_id)
+    record = MaintenanceOverride(
+        car_id=car_id, action=action, reason=reason, actor=actor.name, recorded_at=at
+    )
+    session.add(record)
+    session.flush()
+    return record
+
+
+def overrides_of(session: Session, car_id: str) -> list[MaintenanceOverride]:
+    """The car's overrides, newest first."""
+    query = (
+        select(MaintenanceOverride)
+        .where(MaintenanceOverride.car_id == car_id)
+        .order_by(MaintenanceOverride.id.desc())
+    )
+    return list(session.scalars(query))
+
+
+def latest_overrides(session: Session) -> dict[str, MaintenanceOverride]:
+    """Each car's newest override (the one in force)."""
+    newest: dict[str, MaintenanceOverride] = {}
+    for record in session.scalars(select(MaintenanceOverride).order_by(MaintenanceOverride.id)):
+        newest[record.car_id] = record
+    return newest
