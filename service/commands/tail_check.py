@@ -1,0 +1,196 @@
+"""CLI commands of the tail check: tail-check, calibrate, tail-study, tail-synth.
+
+Registered into ``depot`` by ``service.cli`` through :func:`register`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from tail_check import DEFAULT_PROFILE, CameraProfile, calibrate, detect, load_profile
+from tail_check.study import StudyResult, StudySample, epsilon_curves
+from tail_check.synth import write_study_set
+
+__all__ = ["register"]
+
+
+def _fail(message: str) -> int:
+    print(f"error: {message}", file=sys.stderr)
+    return 2
+
+
+def _profile(path: str | None) -> CameraProfile:
+    return DEFAULT_PROFILE if path is None else load_profile(path)
+
+
+def _read_image(path: str) -> np.ndarray:
+    image = cv2.imread(path, cv2.IMREAD_COLOR)
+    if image is None:
+        raise ValueError(f"cannot read image {path!r} (missing, or not a JPEG/PNG file)")
+    return np.asarray(image, dtype=np.uint8)
+
+
+def _tail_check(args: argparse.Namespace) -> int:
+    try:
+        profile = _profile(args.profile)
+    except ValueError as exc:
+        return _fail(f"{exc}; pass a profile written by `depot calibrate`")
+    failed = False
+    for name in args.files:
+        try:
+            result = detect(_read_image(name), profile)
+        except ValueError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            failed = True
+            continue
+        record = {"file": name, **result.to_dict()}
+        if args.json:
+            print(json.dumps(record))
+        else:
+            box = "-" if result.bbox is None else "x".join(str(v) for v in result.bbox)
+            print(
+                f"{name}: {result.verdict} score={result.score:.2f} bbox={box} "
+                f"s^={result.pixel_fraction:.5f}"
+            )
+    return 2 if failed else 0
+
+
+def _parse_point(text: str) -> tuple[float, float]:
+    parts = text.split(",")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return float(parts[0]), float(parts[1])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y pixel coordinates, got {text!r}") from None
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    try:
+        base = _profile(args.base)
+        profile = calibrate(_read_image(args.image), args.disc, base=base, name=args.name)
+    except ValueError as exc:
+        return _fail(f"{exc}; give a snapshot with the disc visible and --disc X,Y inside it")
+    text = profile.to_json()
+    if args.out:
+        Path(args.out).write_text(text + "\n", encoding="utf-8")
+    print(text)
+    return 0
+
+
+def _study_samples(directory: Path, labels: Path) -> Iterator[StudySample]:
+    with labels.open(newline="", encoding="utf-8") as fh:
+        for row in csv.DictReader(fh):
+            missing = {"file", "s_ref", "ref_x", "ref_y", "x", "y", "w", "h"} - set(row)
+            if missing:
+                raise ValueError(f"labels file lacks column(s) {', '.join(sorted(missing))}")
+            if not row["ref_x"] or float(row["s_ref"] or 0) <= 0:
+                continue
+            image = _read_image(str(directory / row["file"]))
+            point = (int(float(row["ref_x"])), int(float(row["ref_y"])))
+            box = (int(row["x"]), int(row["y"]), int(row["w"]), int(row["h"]))
+            yield StudySample(image, float(row["s_ref"]), point, box, row.get("condition", ""))
+
+
+def _plot(result: StudyResult, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    x = [100 * d for d in result.deltas]
+    for kind, errors in result.mean_error.items():
+        ax.plot(x, [100 * e for e in errors], marker="o", ms=3, label=kind)
+    ax.set_xlabel("c_Δ, % of mean c_ref")
+    ax.set_ylabel("mean ε = |s_ref − ŝ|, % of disc neighbourhood")
+    ax.set_title(f"ε(c_Δ) for box / disk / Gaussian low-pass, {result.count} images")
+    ax.axvline(25, color="grey", lw=0.8, ls="--")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def _tail_study(args: argparse.Namespace) -> int:
+    directory = Path(args.directory)
+    labels = Path(args.labels) if args.labels else directory / "labels.csv"
+    if not directory.is_dir():
+        return _fail(f"{directory} is not a folder; give the folder of labelled snapshots")
+    if not labels.is_file():
+        return _fail(f"labels file {labels} not found; pass --labels (or run `depot tail-synth`)")
+    try:
+        result = epsilon_curves(_study_samples(directory, labels), kernel_fraction=args.kernel)
+    except (ValueError, KeyError) as exc:
+        return _fail(f"{exc}; the labels need columns file,x,y,w,h,s_ref,ref_x,ref_y")
+    plot = Path(args.plot) if args.plot else directory / "epsilon.png"
+    _plot(result, plot)
+    print(result.table())
+    best = result.best_filter(0.25)
+    print(f"\nimages: {result.count}; filter size N = {result.kernel_size} px (working scale)")
+    print(f"lowest mean ε at c_Δ = 25 %: {best}")
+    for kind, errors in result.mean_error.items():
+        i = int(np.argmin(errors))
+        print(
+            f"  {kind:8s} minimum mean ε {100 * errors[i]:.4f} % at c_Δ = "
+            f"{100 * result.deltas[i]:.0f} %"
+        )
+    print(f"plot: {plot}")
+    return 0
+
+
+def _tail_synth(args: argparse.Namespace) -> int:
+    try:
+        w, h = (int(v) for v in args.size.lower().split("x"))
+        labels = write_study_set(args.directory, args.count, seed=args.seed, size=(w, h))
+    except ValueError as exc:
+        return _fail(f"{exc}; e.g. --count 100 --size 640x480")
+    print(f"wrote {args.count} snapshots and {labels}")
+    return 0
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add the tail-check commands to ``depot``'s sub-command parser."""
+    p = subparsers.add_parser("tail-check", help="detect the red tail disc on snapshots")
+    p.add_argument("files", nargs="+", metavar="FILE", help="JPEG/PNG snapshots")
+    p.add_argument("--profile", help="camera profile JSON (default: standard signal red)")
+    p.add_argument("--json", action="store_true", help="one JSON object per file")
+    p.set_defaults(func=_tail_check)
+
+    p = subparsers.add_parser("calibrate", help="print a camera profile from a snapshot")
+    p.add_argument("image", help="snapshot with the disc visible")
+    p.add_argument(
+        "--disc", required=True, type=_parse_point, metavar="X,Y", help="a pixel inside the disc"
+    )
+    p.add_argument("--base", help="profile whose other settings to keep")
+    p.add_argument("--name", default="calibrated", help="profile name")
+    p.add_argument("--out", help="also write the profile to this file")
+    p.set_defaults(func=_calibrate)
+
+    p = subparsers.add_parser("tail-study", help="ε(c_Δ) study for box/disk/Gaussian filters")
+    p.add_argument("directory", metavar="DIR", help="folder of labelled snapshots")
+    p.add_argument("--labels", help="labels CSV (default DIR/labels.csv)")
+    p.add_argument("--plot", help="PNG plot path (default DIR/epsilon.png)")
+    p.add_argument(
+        "--kernel",
+        type=float,
+        default=0.02,
+        help="filter size as a fraction of sqrt(W*H) (default 0.02)",
+    )
+    p.set_defaults(func=_tail_study)
+
+    p = subparsers.add_parser("tail-synth", help="write generated labelled snapshots")
+    p.add_argument("directory", metavar="DIR")
+    p.add_argument("--count", type=int, default=100)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--size", default="640x480", help="WIDTHxHEIGHT")
+    p.set_defaults(func=_tail_synth)

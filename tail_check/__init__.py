@@ -1,0 +1,42 @@
+"""Red tail-disc detection on last-car snapshots, for semi-automatic block clearance.
+
+Pure algorithms (numpy, OpenCV): the paper's colour method (Gaussian low-pass,
+per-channel band ``c_ref ± c_Δ``) with disc-consistency checks, camera profiles,
+calibration, the two-camera comparison, overlays for the review screen and the
+ε(c_Δ) study. Images are BGR ``uint8`` arrays as OpenCV decodes them.
+
+Public API::
+
+    detect(image_bgr, profile=None) -> DetectionResult
+    compare(departure_bgr, arrival_bgr, profile=None) -> Comparison
+    compare_with_departure(departure_result, departure_bgr, arrival_bgr, profile=None)
+    calibrate(image_bgr, (x, y)) -> CameraProfile
+    render_overlay(image_bgr, result, profile=None) -> BGR array; overlay_png(...) -> bytes
+    decode_snapshot(data) -> BGR array
+    CameraProfile, DEFAULT_PROFILE, load_profile
+"""
+
+from .calibrate import calibrate
+from .compare import Comparison, compare, compare_with_departure
+from .detect import WORK_SIDE, DetectionResult, Verdict, decode_snapshot, detect
+from .overlay import overlay_png, render_overlay
+from .profile import DEFAULT_PROFILE, CameraProfile, load_profile
+from .regions import DiscCandidate
+
+__all__ = [
+    "DEFAULT_PROFILE",
+    "WORK_SIDE",
+    "CameraProfile",
+    "Comparison",
+    "DetectionResult",
+    "DiscCandidate",
+    "Verdict",
+    "calibrate",
+    "compare",
+    "compare_with_departure",
+    "decode_snapshot",
+    "detect",
+    "load_profile",
+    "overlay_png",
+    "render_overlay",
+]

@@ -1,0 +1,403 @@
+"""Candidate disc regions: connected regions of the colour mask and their disc score.
+
+Two passes, as in the paper's method: the camera's reference colour finds seed
+regions; then, as the paper picks ``c_ref`` inside the disc on the image itself,
+each seed's own median colour re-extracts the region around it with the same
+``c_Δ``. A real disc then comes out whole (fog, rain and dirt shift its colour
+off the camera reference), while a piece of a red body grows into the body.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from .colour import band_mask, occluder_continues, surround_share
+from .profile import CameraProfile
+from .shape import CUT_SOLIDITY, RegionShape, cut_members, measure_region, ramp
+
+__all__ = ["DiscCandidate", "disc_score", "find_candidates"]
+
+BBox = tuple[int, int, int, int]
+MAX_CANDIDATES = 12
+MAX_CIRCLES = 16
+"""Hough circles checked for a dark rim on a body of the disc's own colour."""
+_CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
+# Exposure tolerance of the second pass: the seed already fixed the exposure.
+_LOCAL_GAIN = (0.75, 1.3)
+
+
+@dataclass(frozen=True)
+class DiscCandidate:
+    """One region of disc colour that was checked for disc shape.
+
+    Attributes
+    ----------
+    bbox : (x, y, w, h)
+        Box in pixels of the original image.
+    score : float
+        Disc-consistency score 0..1 (product of the check memberships).
+    diameter : float
+        Equivalent-circle diameter as a fraction of ``sqrt(W*H)``.
+    shape : RegionShape
+        The shape measures the score was built from.
+    mean_rgb : tuple of 3 float
+        Mean low-passed colour of the region, RGB 0..255.
+    surround : float
+        Share of a ring around the region covered by the same paint (0 for an
+        isolated disc).
+    """
+
+    bbox: BBox
+    score: float
+    diameter: float
+    shape: RegionShape
+    mean_rgb: tuple[float, float, float]
+    surround: float
+    ring: float = 0.0
+
+
+def disc_score(shape: RegionShape, diameter: float, surround: float, p: CameraProfile) -> float:
+    """Disc-consistency score 0..1 of a measured region (product of memberships)."""
+    dmin, dmax = p.disc_diameter_range
+    fmin, fmax = p.fill_range
+    members = (
+        ramp(diameter, 0.7 * dmin, dmin, dmax, 1.3 * dmax),
+        ramp(shape.fill, fmin - 0.08, fmin, fmax, fmax + 0.03),
+        ramp(shape.ellipse_iou, p.min_ellipse_iou - 0.02, p.min_ellipse_iou + 0.02),
+        ramp(shape.solidity, 0.6, 0.72),
+        ramp(shape.aspect, 0.0, 0.0, 0.8 * p.max_aspect, p.max_aspect),
+        ramp(shape.hole_fraction, -1.0, -1.0, 0.12, 0.22),
+        ramp(shape.ellipse_residual, -1.0, -1.0, 0.042, 0.065),
+        1.0 if shape.large_holes <= 1 and shape.holes <= 2 else 0.0,
+        ramp(surround, -1.0, -1.0, 0.3, 0.6),
+    )
+    # A product, not a mean: one clearly failed check must sink the score.
+    whole = float(np.prod(members))
+    if shape.cut is None or whole >= p.present_threshold:
+        return whole
+    # Solidity (stricter: a cut disc is convex), holes and surround still apply.
+    kept = (ramp(shape.solidity, *CUT_SOLIDITY), members[5], members[7], members[8])
+    return max(whole, float(np.prod(kept + cut_members(shape, diameter, p))))
+
+
+def _refine(
+    seed: NDArray[np.bool_],
+    origin: tuple[int, int],
+    smooth: NDArray[np.uint8],
+    valley_free: NDArray[np.bool_],
+    c_delta: float,
+) -> tuple[NDArray[np.bool_], tuple[int, int], NDArray[np.bool_]] | None:
+    """Re-extract a seed with its own median colour as ``c_ref`` in a window around it.
+
+    Returns the region (cropped to its box), the box origin in the working image, and
+    the local band mask of the window, or None when the region runs into the window
+    border (it is part of something larger than a disc).
+    """
+    sx, sy = origin
+    sh, sw = seed.shape
+    pad = max(3, int(0.9 * max(sh, sw)))
+    x0, y0 = max(0, sx - pad), max(0, sy - pad)
+    x1, y1 = min(smooth.shape[1], sx + sw + pad), min(smooth.shape[0], sy + sh + pad)
+    window = smooth[y0:y1, x0:x1]
+    ref_bgr = np.median(smooth[sy : sy + sh, sx : sx + sw][seed], axis=0)
+    ref_rgb = (float(ref_bgr[2]), float(ref_bgr[1]), float(ref_bgr[0]))
+    if sum(ref_rgb) < 3:
+        return None
+    local = band_mask(window, ref_rgb, c_delta, gain_range=_LOCAL_GAIN)
+    local &= valley_free[y0:y1, x0:x1]
+    local |= _place(seed, (sx - x0, sy - y0), local.shape)
+    n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
+        cv2.erode(local.view(np.uint8), _CROSS), 8, cv2.CV_16U, cv2.CCL_GRANA
+    )
+    seed_labels = labels[sy - y0 : sy - y0 + sh, sx - x0 : sx - x0 + sw][seed]
+    seed_labels = seed_labels[seed_labels > 0]
+    if seed_labels.size == 0:
+        return None
+    label = int(np.bincount(seed_labels).argmax())
+    x, y, w, h = (int(v) for v in stats[label, :4])
+    touches = (x == 0 and x0 > 0) or (y == 0 and y0 > 0)
+    touches |= x + w >= local.shape[1] and x1 < smooth.shape[1]
+    touches |= y + h >= local.shape[0] and y1 < smooth.shape[0]
+    if touches:
+        return None
+    x, y = max(0, x - 1), max(0, y - 1)
+    w, h = min(local.shape[1] - x, w + 2), min(local.shape[0] - y, h + 2)
+    core = (labels[y : y + h, x : x + w] == label).view(np.uint8)
+    region = (cv2.dilate(core, _CROSS) & local[y : y + h, x : x + w].view(np.uint8)).astype(bool)
+    band = np.zeros(smooth.shape[:2], bool)
+    band[y0:y1, x0:x1] = local
+    return region, (x0 + x, y0 + y), band
+
+
+def _place(
+    part: NDArray[np.bool_], at: tuple[int, int], shape: tuple[int, ...]
+) -> NDArray[np.bool_]:
+    out = np.zeros(shape[:2], bool)
+    out[at[1] : at[1] + part.shape[0], at[0] : at[0] + part.shape[1]] = part
+    return out
+
+
+def _seeds(
+    mask: NDArray[np.bool_], p: CameraProfile, work_side: float
+) -> list[tuple[BBox, NDArray[np.bool_]]]:
+    """Connected regions of ``mask`` of plausible size, largest first, as (box, pixels)."""
+    # Label an eroded mask so that 1-2 px bridges (a seam through the rim onto a red
+    # body) do not join the disc to its surroundings.
+    mask_u8 = mask.view(np.uint8)
+    n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
+        cv2.erode(mask_u8, _CROSS), 8, cv2.CV_16U, cv2.CCL_GRANA
+    )
+    dmin, dmax = p.disc_diameter_range
+    area_min = math.pi / 4 * (0.5 * dmin * work_side) ** 2
+    area_max = math.pi / 4 * (1.3 * dmax * work_side) ** 2
+    areas = stats[1:, cv2.CC_STAT_AREA]
+    keep = np.nonzero((areas >= area_min) & (areas <= area_max))[0] + 1
+    keep = keep[np.argsort(-stats[keep, cv2.CC_STAT_AREA])][:MAX_CANDIDATES]
+    out = []
+    for label in keep:
+        x, y, w, h = (int(v) for v in stats[label, :4])
+        x, y = max(0, x - 1), max(0, y - 1)
+        w, h = min(mask.shape[1] - x, w + 2), min(mask.shape[0] - y, h + 2)
+        core = (labels[y : y + h, x : x + w] == label).view(np.uint8)
+        out.append(
+            (
+                (x, y, w, h),
+                (
+                    np.asarray(cv2.dilate(core, _CROSS), np.uint8) & mask_u8[y : y + h, x : x + w]
+                ).astype(bool),
+            )
+        )
+    return out
+
+
+def find_candidates(
+    mask: NDArray[np.bool_],
+    band: NDArray[np.bool_],
+    smooth: NDArray[np.uint8],
+    valley_free: NDArray[np.bool_],
+    p: CameraProfile,
+    *,
+    origin: tuple[int, int],
+    scale: float,
+    work_side: float,
+) -> list[DiscCandidate]:
+    """Disc candidates in a working-scale search region, best first.
+
+    Parameters
+    ----------
+    mask : ndarray (h, w) bool
+        Camera-band pixels off dark seams (the seeds).
+    band : ndarray (h, w) bool
+        Camera-band pixels (for the surround check).
+    smooth : ndarray (h, w, 3) uint8
+        Low-passed BGR working image.
+    valley_free : ndarray (h, w) bool
+        False on dark seams.
+    origin, scale
+        The region's top-left corner in the original image and the working scale
+        (working pixels per original pixel), to report boxes in original pixels.
+    work_side : float
+        ``sqrt(w*h)`` of the whole working image, for relative sizes.
+    """
+    found: list[DiscCandidate] = []
+    for (x, y, _w, _h), seed in _seeds(mask, p, work_side):
+        refined = _refine(seed, (x, y), smooth, valley_free, p.c_delta)
+        if refined is None:
+            continue
+        region, (rx, ry), local_band = refined
+        shape = measure_region(region)
+        if shape is None:
+            continue
+        rh, rw = region.shape
+        diameter = math.sqrt(4.0 * shape.area / math.pi) / work_side
+        mean_bgr = smooth[ry : ry + rh, rx : rx + rw][region].mean(axis=0)
+        surround = surround_share(
+            band | local_band, smooth[..., 2], (rx, ry, rw, rh), float(mean_bgr[2])
+        )
+        bbox = (
+            origin[0] + int(round(rx / scale)),
+            origin[1] + int(round(ry / scale)),
+            max(1, int(round(rw / scale))),
+            max(1, int(round(rh / scale))),
+        )
+        ring = _ring_contrast(smooth, region, (rx, ry))
+        score = disc_score(shape, diameter, surround, p)
+        if score >= p.present_threshold and shape.cut is not None:
+            # Present on the strength of a cut-disc fit only if a real occluder did it.
+            whole = disc_score(replace(shape, cut=None), diameter, surround, p)
+            if whole < p.present_threshold:
+                score = max(whole, score * occluder_continues(smooth, shape.cut, (rx, ry)))
+        found.append(
+            DiscCandidate(
+                bbox=bbox,
+                score=score,
+                diameter=diameter,
+                shape=shape,
+                mean_rgb=(float(mean_bgr[2]), float(mean_bgr[1]), float(mean_bgr[0])),
+                surround=surround,
+                ring=ring,
+            )
+        )
+    found.sort(key=lambda c: -c.score)
+    return _distinct(found)
+
+
+def _ring_contrast(image: NDArray[np.uint8], region: NDArray[np.bool_], at: tuple[int, int]) -> float:
+    """Chromaticity difference between the region's outer band and its inner annulus."""
+    h, w = region.shape
+    m = cv2.moments(region.view(np.uint8), binaryImage=True)
+    if m["m00"] <= 0:
+        return 0.0
+    cx, cy = m["m10"] / m["m00"], m["m01"] / m["m00"]
+    r = math.sqrt(m["m00"] / math.pi)
+    yy, xx = np.mgrid[0:h, 0:w]
+    rho = np.hypot(xx + 0.0 - cx, yy + 0.0 - cy) / max(r, 1e-6)
+    patch = image[at[1] : at[1] + h, at[0] : at[0] + w].astype(np.float32)
+    inner = region & (rho >= 0.45) & (rho <= 0.7)
+    outer = region & (rho >= 0.8)
+    if np.count_nonzero(inner) < 4 or np.count_nonzero(outer) < 4:
+        return 0.0
+    a, b = np.median(patch[inner], axis=0), np.median(patch[outer], axis=0)
+    ca, cb = a / max(1.0, float(a.sum())), b / max(1.0, float(b.sum()))
+    return float(np.max(np.abs(ca - cb)))
+
+
+def _distinct(cands: list[DiscCandidate]) -> list[DiscCandidate]:
+    """Drop candidates whose box centre lies in a better candidate's box (same disc)."""
+    out: list[DiscCandidate] = []
+    for c in cands:
+        cx, cy = c.bbox[0] + c.bbox[2] / 2, c.bbox[1] + c.bbox[3] / 2
+        if not any(
+            o.bbox[0] <= cx <= o.bbox[0] + o.bbox[2] and o.bbox[1] <= cy <= o.bbox[1] + o.bbox[3]
+            for o in out
+        ):
+            out.append(c)
+    return out
+
+
+def _ring_profile(red: NDArray[np.float32], cx: float, cy: float, r: float) -> float:
+    """Share of directions in which a dark rim separates the circle from its inside."""
+    angles = np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)
+    ca, sa = np.cos(angles), np.sin(angles)
+    h, w = red.shape
+
+    def sample(radius: float) -> NDArray[np.float32]:
+        xs = np.clip(np.round(cx + radius * ca).astype(int), 0, w - 1)
+        ys = np.clip(np.round(cy + radius * sa).astype(int), 0, h - 1)
+        return np.asarray(red[ys, xs], dtype=np.float32)
+
+    inside = np.maximum(sample(0.7 * r), sample(0.8 * r))
+    rim = np.minimum.reduce([sample(f * r) for f in (0.9, 0.97, 1.04, 1.11, 1.18)])
+    outside = np.maximum(sample(1.3 * r), sample(1.4 * r))
+    dark = (rim < 0.8 * inside) & ((rim < 0.85 * outside) | (outside < 0.5 * inside))
+    return float(np.mean(dark))
+
+
+def _rim_candidate(
+    redf: NDArray[np.float32],
+    band: NDArray[np.bool_],
+    smooth: NDArray[np.uint8],
+    circle: tuple[float, float, float],
+    p: CameraProfile,
+    *,
+    origin: tuple[int, int],
+    scale: float,
+    work_side: float,
+) -> DiscCandidate:
+    """Score one Hough circle: a dark rim around it and the disc colour inside."""
+    hx, hy, hr = circle
+    # The Hough centre and radius are only good to a pixel or two; the rim test is
+    # not, so take the best of a small neighbourhood.
+    rim, cx, cy, r = max(
+        (_ring_profile(redf, hx + dx, hy + dy, hr * f), hx + dx, hy + dy, hr * f)
+        for dx in (-1.5, 0.0, 1.5)
+        for dy in (-1.5, 0.0, 1.5)
+        for f in (0.92, 1.0, 1.08)
+    )
+    disc = np.zeros(band.shape, np.uint8)
+    cv2.circle(disc, (round(cx), round(cy)), max(1, round(0.85 * r)), 1, -1)
+    inside = disc > 0
+    in_band = float(np.count_nonzero(band & inside)) / max(1, int(np.count_nonzero(inside)))
+    dmin, dmax = p.disc_diameter_range
+    diameter = 2.0 * r / work_side
+    score = ramp(rim, 0.6, 0.85) * ramp(in_band, 0.7, 0.9)
+    score *= ramp(diameter, 0.7 * dmin, dmin, dmax, 1.3 * dmax)
+    side = max(1, int(round(2 * r / scale)))
+    bbox = (
+        origin[0] + int(round((cx - r) / scale)),
+        origin[1] + int(round((cy - r) / scale)),
+        side,
+        side,
+    )
+    mean_bgr = smooth[inside].mean(axis=0) if inside.any() else np.zeros(3)
+    shape = RegionShape(
+        area=math.pi * r**2,
+        fill=math.pi / 4,
+        ellipse_iou=1.0,
+        solidity=1.0,
+        aspect=1.0,
+        hole_fraction=0.0,
+        ellipse_residual=0.0,
+    )
+    return DiscCandidate(
+        bbox=bbox,
+        score=score,
+        diameter=diameter,
+        shape=shape,
+        mean_rgb=(float(mean_bgr[2]), float(mean_bgr[1]), float(mean_bgr[0])),
+        surround=1.0 - rim,
+    )
+
+
+def rim_candidates(
+    band: NDArray[np.bool_],
+    smooth: NDArray[np.uint8],
+    sharp_red: NDArray[np.uint8],
+    p: CameraProfile,
+    *,
+    origin: tuple[int, int],
+    scale: float,
+    work_side: float,
+) -> list[DiscCandidate]:
+    """Discs on a body of their own colour, found by their dark rim (circle search).
+
+    Used only where disc-coloured paint covers much of the search region (a red car):
+    there the colour regions merge, and only the disc's outline separates it.
+    ``sharp_red`` is the red channel before the full low-pass, where a thin rim
+    still shows.
+    """
+    red = smooth[..., 2]
+    dmin, dmax = p.disc_diameter_range
+    rmin, rmax = max(3, int(0.5 * dmin * work_side)), int(0.5 * dmax * work_side) + 1
+    circles = cv2.HoughCircles(
+        red,
+        cv2.HOUGH_GRADIENT,
+        dp=1,
+        minDist=float(rmin),
+        param1=60,
+        param2=18,
+        minRadius=rmin,
+        maxRadius=rmax,
+    )
+    if circles is None:
+        return []
+    redf = sharp_red.astype(np.float32)
+    found = [
+        _rim_candidate(
+            redf,
+            band,
+            smooth,
+            (float(hx), float(hy), float(hr)),
+            p,
+            origin=origin,
+            scale=scale,
+            work_side=work_side,
+        )
+        for hx, hy, hr in circles[0][:MAX_CIRCLES]
+    ]
+    return sorted(found, key=lambda c: -c.score)
