@@ -51,7 +51,7 @@ def test_dispatcher_blocks_the_alarm_and_clears_another(tmp_path: Path) -> None:
             page = browser.new_page(viewport={"width": 1366, "height": 768})
             page.goto(f"{url}/review")
             page.fill("#token", token)
-            page.click("text=Log in")
+            page.get_by_role("button", name="Log in").click()
             expect(page.locator("#sections tr[data-section=AB] .state")).to_have_text("ALARM")
 
             page.click("#queue a:has-text('Section AB')")
