@@ -6,7 +6,7 @@ import math
 from datetime import datetime
 from typing import Annotated, Any, Literal
 
-from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, TypeAdapter, field_validator
+from pydantic import AfterValidator, AwareDatetime, BaseModel, ConfigDict, Field, TypeAdapter
 
 EventId = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[\x21-\x7e]+$")]
 SectionId = Annotated[str, Field(min_length=1, max_length=32)]
@@ -77,21 +77,25 @@ class WheelMarksWritten(EventBase):
     detections: Annotated[list[Literal["W1", "W2"]], Field(max_length=1000)]
 
 
+def _finite(values: dict[str, float]) -> dict[str, float]:
+    bad = [name for name, value in values.items() if not math.isfinite(value)]
+    if bad:
+        raise ValueError(f"values must be finite numbers: {', '.join(bad)}")
+    return values
+
+
+# A test's readings by parameter name (bench, on-board diagnostics, API, CSV import).
+MeasuredValues = Annotated[
+    dict[Annotated[str, Field(min_length=1, max_length=64)], float],
+    Field(min_length=1, max_length=200),
+    AfterValidator(_finite),
+]
+
+
 class Measurement(EventBase):
     kind: Literal["measurement"]
     car: CarId
-    values: Annotated[
-        dict[Annotated[str, Field(min_length=1, max_length=64)], float],
-        Field(min_length=1, max_length=200),
-    ]
-
-    @field_validator("values")
-    @classmethod
-    def _finite(cls, values: dict[str, float]) -> dict[str, float]:
-        bad = [k for k, v in values.items() if not math.isfinite(v)]
-        if bad:
-            raise ValueError(f"values must be finite numbers: {', '.join(bad)}")
-        return values
+    values: MeasuredValues
 
 
 class MotionSample(EventBase):

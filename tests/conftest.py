@@ -102,11 +102,9 @@ def client(app: Any) -> Iterator[TestClient]:
 ADMIN = {"Authorization": f"Bearer {ADMIN_TOKEN}"}
 
 
-@pytest.fixture
-def committed_app(engine: Engine) -> Iterator[Any]:
-    """The app with real, committing sessions (for concurrency tests); tables emptied after."""
+def app_on(engine: Engine) -> Any:
+    """The app with real, committing request sessions on ``engine`` (no per-test rollback)."""
     from service.app import create_app
-    from service.models import metadata
 
     factory = sessionmaker(bind=engine, expire_on_commit=False)
     application = create_app()
@@ -123,6 +121,15 @@ def committed_app(engine: Engine) -> Iterator[Any]:
             db.close()
 
     application.dependency_overrides[get_session] = _real_session
+    return application
+
+
+@pytest.fixture
+def committed_app(engine: Engine) -> Iterator[Any]:
+    """The app with real, committing sessions (for concurrency tests); tables emptied after."""
+    from service.models import metadata
+
+    application = app_on(engine)
     yield application
     with engine.begin() as connection:
         for table in reversed(metadata.sorted_tables):

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-import math
 from typing import Annotated, Literal
 
 from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, field_validator
+
+from ingest.schemas import MeasuredValues
 
 ParameterName = Annotated[
     str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
@@ -22,18 +23,7 @@ class StrictModel(BaseModel):
 
 class MeasurementIn(StrictModel):
     taken_at: AwareDatetime
-    values: Annotated[
-        dict[Annotated[str, Field(min_length=1, max_length=64)], float],
-        Field(min_length=1, max_length=200),
-    ]
-
-    @field_validator("values")
-    @classmethod
-    def _finite(cls, values: dict[str, float]) -> dict[str, float]:
-        bad = [name for name, value in values.items() if not math.isfinite(value)]
-        if bad:
-            raise ValueError(f"values must be finite numbers: {', '.join(bad)}")
-        return values
+    values: MeasuredValues
 
 
 class ParameterIn(StrictModel):

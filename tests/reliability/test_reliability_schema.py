@@ -20,11 +20,10 @@ from schemathesis.specs.openapi.checks import (
     response_schema_conformance,
     status_code_conformance,
 )
-from sqlalchemy.orm import Session, sessionmaker
 
-from service.database import get_session, make_engine
+from service.database import make_engine
 from service.migrate import upgrade
-from tests.conftest import ADMIN
+from tests.conftest import ADMIN, app_on
 from tests.reliability.matrix import ENDPOINTS
 from tests.reliability.relkit import SOAK
 from tests.service.linekit import build_line
@@ -36,26 +35,10 @@ DEVICE_PATHS = {"/api/v1/events": "B-ac", "/api/v1/snapshots": "B-cam"}
 @pytest.fixture(scope="module")
 def fuzz_app(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Any, dict[str, Any]]]:
     """The app on its own committed SQLite database with the small line built."""
-    from service.app import create_app
-
     url = f"sqlite:///{Path(tmp_path_factory.mktemp('schema')) / 'fuzz.sqlite3'}"
     upgrade(url)
     engine = make_engine(url)
-    factory = sessionmaker(bind=engine, expire_on_commit=False)
-    app = create_app()
-
-    def _session() -> Iterator[Session]:
-        db = factory()
-        try:
-            yield db
-            db.commit()
-        except BaseException:
-            db.rollback()
-            raise
-        finally:
-            db.close()
-
-    app.dependency_overrides[get_session] = _session
+    app = app_on(engine)
     with TestClient(app) as client:
         keys = build_line(client)
     yield app, keys
