@@ -3,7 +3,8 @@
 Pipeline (paper + spec): crop the search region, bring it to a fixed working scale
 (so nothing depends on the image size), Gaussian low-pass, per-channel band
 ``c_ref ± c_Δ``, connected regions, disc-consistency checks (size relative to the
-image, fill ratio, ellipse fit, solidity, holes, aspect), verdict.
+image, fill ratio, ellipse fit, solidity, holes, aspect; or, for a disc partly behind a
+pole, an elliptic arc cut by a straight edge that the occluder continues), verdict.
 
 Safety stance: a false ``present`` can clear a section with cars still in it, so
 weak evidence yields ``uncertain`` and poor images lower the confidence of ``absent``.

@@ -58,7 +58,6 @@ class DiscCandidate:
     shape: RegionShape
     mean_rgb: tuple[float, float, float]
     surround: float
-    ring: float = 0.0
 
 
 def disc_score(shape: RegionShape, diameter: float, surround: float, p: CameraProfile) -> float:
@@ -225,46 +224,36 @@ def find_candidates(
             max(1, int(round(rw / scale))),
             max(1, int(round(rh / scale))),
         )
-        ring = _ring_contrast(smooth, region, (rx, ry))
-        score = disc_score(shape, diameter, surround, p)
-        if score >= p.present_threshold and shape.cut is not None:
-            # Present on the strength of a cut-disc fit only if a real occluder did it.
-            whole = disc_score(replace(shape, cut=None), diameter, surround, p)
-            if whole < p.present_threshold:
-                score = max(whole, score * occluder_continues(smooth, shape.cut, (rx, ry)))
         found.append(
             DiscCandidate(
                 bbox=bbox,
-                score=score,
+                score=_checked_score(shape, diameter, surround, smooth, (rx, ry), p),
                 diameter=diameter,
                 shape=shape,
                 mean_rgb=(float(mean_bgr[2]), float(mean_bgr[1]), float(mean_bgr[0])),
                 surround=surround,
-                ring=ring,
             )
         )
     found.sort(key=lambda c: -c.score)
     return _distinct(found)
 
 
-def _ring_contrast(image: NDArray[np.uint8], region: NDArray[np.bool_], at: tuple[int, int]) -> float:
-    """Chromaticity difference between the region's outer band and its inner annulus."""
-    h, w = region.shape
-    m = cv2.moments(region.view(np.uint8), binaryImage=True)
-    if m["m00"] <= 0:
-        return 0.0
-    cx, cy = m["m10"] / m["m00"], m["m01"] / m["m00"]
-    r = math.sqrt(m["m00"] / math.pi)
-    yy, xx = np.mgrid[0:h, 0:w]
-    rho = np.hypot(xx + 0.0 - cx, yy + 0.0 - cy) / max(r, 1e-6)
-    patch = image[at[1] : at[1] + h, at[0] : at[0] + w].astype(np.float32)
-    inner = region & (rho >= 0.45) & (rho <= 0.7)
-    outer = region & (rho >= 0.8)
-    if np.count_nonzero(inner) < 4 or np.count_nonzero(outer) < 4:
-        return 0.0
-    a, b = np.median(patch[inner], axis=0), np.median(patch[outer], axis=0)
-    ca, cb = a / max(1.0, float(a.sum())), b / max(1.0, float(b.sum()))
-    return float(np.max(np.abs(ca - cb)))
+def _checked_score(
+    shape: RegionShape,
+    diameter: float,
+    surround: float,
+    smooth: NDArray[np.uint8],
+    at: tuple[int, int],
+    p: CameraProfile,
+) -> float:
+    """:func:`disc_score`, with a cut-disc fit trusted for ``present`` only where a real
+    occluder (a pole, a post) goes on past the disc along the cut."""
+    score = disc_score(shape, diameter, surround, p)
+    if score >= p.present_threshold and shape.cut is not None:
+        whole = disc_score(replace(shape, cut=None), diameter, surround, p)
+        if whole < p.present_threshold:
+            score = max(whole, score * occluder_continues(smooth, shape.cut, at))
+    return score
 
 
 def _distinct(cands: list[DiscCandidate]) -> list[DiscCandidate]:
@@ -280,22 +269,29 @@ def _distinct(cands: list[DiscCandidate]) -> list[DiscCandidate]:
     return out
 
 
-def _ring_profile(red: NDArray[np.float32], cx: float, cy: float, r: float) -> float:
-    """Share of directions in which a dark rim separates the circle from its inside."""
-    angles = np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)
-    ca, sa = np.cos(angles), np.sin(angles)
+_ANGLES = np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)
+# Sample radii (fractions of r): inside the disc, across its rim, outside it.
+_RING_RADII = np.array([0.7, 0.8, 0.9, 0.97, 1.04, 1.11, 1.18, 1.3, 1.4])
+
+
+def _ring_profiles(
+    red: NDArray[np.float32],
+    cx: NDArray[np.float64],
+    cy: NDArray[np.float64],
+    r: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Per circle, the share of directions in which a dark rim separates it from its
+    inside (all circles at once)."""
     h, w = red.shape
-
-    def sample(radius: float) -> NDArray[np.float32]:
-        xs = np.clip(np.round(cx + radius * ca).astype(int), 0, w - 1)
-        ys = np.clip(np.round(cy + radius * sa).astype(int), 0, h - 1)
-        return np.asarray(red[ys, xs], dtype=np.float32)
-
-    inside = np.maximum(sample(0.7 * r), sample(0.8 * r))
-    rim = np.minimum.reduce([sample(f * r) for f in (0.9, 0.97, 1.04, 1.11, 1.18)])
-    outside = np.maximum(sample(1.3 * r), sample(1.4 * r))
+    radius = r[:, None, None] * _RING_RADII[None, :, None]
+    xs = np.clip(np.round(cx[:, None, None] + radius * np.cos(_ANGLES)).astype(int), 0, w - 1)
+    ys = np.clip(np.round(cy[:, None, None] + radius * np.sin(_ANGLES)).astype(int), 0, h - 1)
+    v = red[ys, xs]
+    inside = np.maximum(v[:, 0], v[:, 1])
+    rim = v[:, 2:7].min(axis=1)
+    outside = np.maximum(v[:, 7], v[:, 8])
     dark = (rim < 0.8 * inside) & ((rim < 0.85 * outside) | (outside < 0.5 * inside))
-    return float(np.mean(dark))
+    return np.asarray(dark.mean(axis=1), dtype=np.float64)
 
 
 def _rim_candidate(
@@ -313,12 +309,13 @@ def _rim_candidate(
     hx, hy, hr = circle
     # The Hough centre and radius are only good to a pixel or two; the rim test is
     # not, so take the best of a small neighbourhood.
-    rim, cx, cy, r = max(
-        (_ring_profile(redf, hx + dx, hy + dy, hr * f), hx + dx, hy + dy, hr * f)
-        for dx in (-1.5, 0.0, 1.5)
-        for dy in (-1.5, 0.0, 1.5)
-        for f in (0.92, 1.0, 1.08)
+    dx, dy, f = (
+        g.ravel() for g in np.meshgrid([-1.5, 0.0, 1.5], [-1.5, 0.0, 1.5], [0.92, 1.0, 1.08])
     )
+    cxs, cys, rs = hx + dx, hy + dy, hr * f
+    rims = _ring_profiles(redf, cxs, cys, rs)
+    best = int(np.lexsort((rs, cys, cxs, rims))[-1])  # the largest, ties as max() on tuples
+    rim, cx, cy, r = float(rims[best]), float(cxs[best]), float(cys[best]), float(rs[best])
     disc = np.zeros(band.shape, np.uint8)
     cv2.circle(disc, (round(cx), round(cy)), max(1, round(0.85 * r)), 1, -1)
     inside = disc > 0

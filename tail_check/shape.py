@@ -23,6 +23,10 @@ CUT_ARC = (0.045, 0.065)
 CUT_EDGE = (0.04, 0.08)
 CUT_VISIBLE = (0.45, 0.65)
 CUT_SOLIDITY = (0.86, 0.92)
+ARC_FIT_ROUNDS = 12
+WHOLE_RESIDUAL = 0.03
+"""Hull residual below which a region is a whole ellipse (no cut-disc fit needed)."""
+"""Refits of the arc ellipse; a deep cut needs several to stop pulling the fit in."""
 
 
 @dataclass(frozen=True)
@@ -163,6 +167,7 @@ Ellipse = tuple[tuple[float, float], tuple[float, float], float]
 
 
 def _fit_ellipse(pts: NDArray[np.float32]) -> Ellipse:
+    """Least-squares ellipse through the points, as plain floats."""
     (cx, cy), (d1, d2), angle = cv2.fitEllipse(pts)
     return (float(cx), float(cy)), (float(d1), float(d2)), float(angle)
 
@@ -183,7 +188,7 @@ def _arc_fit(pts: NDArray[np.float32]) -> tuple[Ellipse, NDArray[np.bool_]]:
     mask of the points on the arc."""
     keep = np.ones(len(pts), bool)
     box = _fit_ellipse(pts)
-    for _ in range(5):
+    for _ in range(ARC_FIT_ROUNDS):
         radius = 0.25 * (box[1][0] + box[1][1])
         new = _ellipse_rho(pts, box) >= 1.0 - max(0.04, 1.0 / max(radius, 1.0))
         if np.array_equal(new, keep) or np.count_nonzero(new) < 8:
@@ -301,17 +306,21 @@ def measure_region(component: NDArray[np.bool_]) -> RegionShape | None:
     union = float(np.count_nonzero(hull_img | ellipse))
     bw, bh = cv2.boundingRect(outline)[2:]
     large, small = _hole_counts((filled & ~canvas).astype(bool), area)
+    solidity = area / hull_area if hull_area else 0.0
+    # A cut-disc fit only where it can matter: convex enough, and not a whole ellipse.
+    worth = solidity > CUT_SOLIDITY[0] and residual > WHOLE_RESIDUAL
+    cut = _fit_cut(hull_img, hull_outline, pad) if worth else None
     return RegionShape(
         area=area,
         fill=hull_area / float(bw * bh),
         ellipse_iou=inter / union if union else 0.0,
-        solidity=area / hull_area if hull_area else 0.0,
+        solidity=solidity,
         aspect=max(bw, bh) / max(1, min(bw, bh)),
         hole_fraction=1.0 - float(np.count_nonzero(canvas & filled)) / area,
         large_holes=large,
         holes=small,
         ellipse_residual=residual,
-        cut=_fit_cut(hull_img, hull_outline, pad),
+        cut=cut,
     )
 
 

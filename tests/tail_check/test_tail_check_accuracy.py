@@ -1,13 +1,13 @@
 """Accuracy on generated snapshots (issue 4 targets), default profile, fixed seeds.
 
-Issue targets: >= 97 % correct verdicts, `uncertain` <= 5 %, and no `present` on an
-image without a disc. 500 images at 640x480.
+Issue targets, asserted here: >= 97 % correct verdicts, `uncertain` <= 5 %, and no
+`present` on an image without a disc. 500 images at 640x480, seed 2026.
 
-Measured here (seed 2026): 96.2-96.4 % correct, about 2.5 % uncertain, no false
-`present` -- the 97 % target is NOT met by the generated set; most of the shortfall
-is partly occluded discs (verdict `uncertain`, as the safety stance wants) and discs
-on cars of their own colour. The assertion below holds the measured level so that a
-regression fails; the gap is reported in the closing note.
+Measured (seed 2026): 97.8 % correct (disc images 220 present / 5 uncertain / 4
+absent; no-disc 0 present / 2 uncertain / 269 absent), 1.4 % uncertain. The
+remaining misses are mostly discs on cars of their own colour. On another seed
+(7) the same detector gives 96.4 %, so the margin over 97 % is not large; on
+320x240 images (seed 2026) 91.8 %, with no false `present`.
 """
 
 from __future__ import annotations
@@ -32,5 +32,5 @@ def test_accuracy_targets_on_generated_snapshots() -> None:
     print("confusion:", table)
     assert sum(confusion.values()) == COUNT
     assert confusion[("absent", "present")] == 0, table
-    assert correct / COUNT >= 0.955, table
+    assert correct / COUNT >= 0.97, table
     assert uncertain / COUNT <= 0.05, table
