@@ -3,11 +3,23 @@
 from __future__ import annotations
 
 import math
-from datetime import datetime
+from datetime import UTC, datetime
 from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, AwareDatetime, BaseModel, ConfigDict, Field, TypeAdapter
 
+EARLIEST = datetime(2000, 1, 1, tzinfo=UTC)
+LATEST = datetime(2100, 1, 1, tzinfo=UTC)
+
+
+def _plausible(at: datetime) -> datetime:
+    # A device clock outside this range is broken; its times would poison every computation.
+    if not EARLIEST <= at < LATEST:
+        raise ValueError("time must be between 2000-01-01 and 2100-01-01 (check the device clock)")
+    return at
+
+
+DeviceTime = Annotated[AwareDatetime, AfterValidator(_plausible)]
 EventId = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[\x21-\x7e]+$")]
 SectionId = Annotated[str, Field(min_length=1, max_length=32)]
 TrainNumber = Annotated[str, Field(min_length=1, max_length=32)]
@@ -19,7 +31,7 @@ class EventBase(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     event_id: EventId
-    occurred_at: AwareDatetime
+    occurred_at: DeviceTime
 
 
 class SectionEvent(EventBase):

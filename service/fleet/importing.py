@@ -15,6 +15,7 @@ from typing import TextIO
 from sqlalchemy import insert, select
 from sqlalchemy.orm import Session
 
+from ingest.schemas import EARLIEST, LATEST
 from service.errors import Unprocessable
 from service.fleet.models import Measurement
 from service.fleet.service import measurement_row
@@ -37,6 +38,9 @@ def _when(text: str, line: int, errors: list[str]) -> datetime | None:
         return None
     if at.tzinfo is None:
         errors.append(f"line {line}: taken_at {text!r} has no offset; write e.g. {text}Z")
+        return None
+    if not EARLIEST <= at < LATEST:
+        errors.append(f"line {line}: taken_at {text!r} is not between 2000 and 2100")
         return None
     return at
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from ingest.schemas import MeasuredValues
+from ingest.schemas import DeviceTime, MeasuredValues
 
 ParameterName = Annotated[
     str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
@@ -22,7 +22,7 @@ class StrictModel(BaseModel):
 
 
 class MeasurementIn(StrictModel):
-    taken_at: AwareDatetime
+    taken_at: DeviceTime
     values: MeasuredValues
 
 

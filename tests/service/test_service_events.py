@@ -96,6 +96,7 @@ def test_every_kind_accepted_once(client: TestClient, device: str, body: dict[st
         (event("x", "axle_count", section="AB", axles=-1), "axles"),
         (event("x", "axle_count", at="yesterday", section="AB", axles=3), "occurred_at"),
         (event("x", "axle_count", at="2026-11-23T10:15:00", section="AB", axles=3), "occurred_at"),
+        (event("x", "axle_count", at="0001-01-01T00:00:00Z", section="AB", axles=3), "occurred_at"),
         (event("", "axle_count", section="AB", axles=3), "event_id"),
         (event("x" * 65, "axle_count", section="AB", axles=3), "event_id"),
         (event("x", "teleport", section="AB"), "kind"),
