@@ -102,6 +102,8 @@ def build_parser() -> argparse.ArgumentParser:
         func=_replay
     )
     for module in pkgutil.iter_modules(commands.__path__):
+        if module.name.startswith("_"):
+            continue  # helpers of the command modules, not commands
         importlib.import_module(f"service.commands.{module.name}").register(sub)
     return parser
 
