@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field
 
 from ingest.schemas import DeviceTime, MeasuredValues
+from service.reasons import Reason
 
 ParameterName = Annotated[
     str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
@@ -44,11 +45,4 @@ class ForecastRunIn(StrictModel):
 
 class MaintenanceDecisionIn(StrictModel):
     action: Literal["keep_in_service", "withdraw_now"]
-    reason: Annotated[str, Field(min_length=3, max_length=2000)]
-
-    @field_validator("reason")
-    @classmethod
-    def _meaningful(cls, reason: str) -> str:
-        if len(reason.strip()) < 3:
-            raise ValueError("give a reason of at least 3 characters")
-        return reason.strip()
+    reason: Reason
