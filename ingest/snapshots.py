@@ -17,6 +17,7 @@ from PIL import Image, UnidentifiedImageError
 from service.errors import PayloadTooLarge, Unprocessable
 
 FORMATS = {"JPEG": ("image/jpeg", ".jpg"), "PNG": ("image/png", ".png")}
+SUFFIXES = dict(FORMATS.values())  # content type -> file suffix of the stored image
 
 
 @dataclass(frozen=True)
@@ -76,6 +77,11 @@ def check_image(data: bytes, *, max_bytes: int, max_pixels: int) -> CheckedImage
 
 def image_path(image_dir: Path, sha256: str, suffix: str) -> Path:
     return image_dir / sha256[:2] / f"{sha256}{suffix}"
+
+
+def stored_image(image_dir: Path, sha256: str, content_type: str) -> Path:
+    """Where an accepted upload of ``content_type`` with this hash was stored."""
+    return image_path(image_dir, sha256, SUFFIXES[content_type])
 
 
 def store_image(image_dir: Path, checked: CheckedImage, data: bytes) -> Path:

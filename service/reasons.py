@@ -6,11 +6,20 @@ from typing import Annotated
 
 from pydantic import AfterValidator, Field
 
-
-def _meaningful(reason: str) -> str:
-    if len(reason.strip()) < 3:
-        raise ValueError("give a reason of at least 3 characters")
-    return reason.strip()
+MIN_LENGTH = 3
 
 
-Reason = Annotated[str, Field(min_length=3, max_length=2000), AfterValidator(_meaningful)]
+def meaningful(reason: str) -> str | None:
+    """The reason as it will be kept, or None when it says nothing (one rule: API and forms)."""
+    kept = reason.strip()
+    return kept if len(kept) >= MIN_LENGTH else None
+
+
+def _required(reason: str) -> str:
+    kept = meaningful(reason)
+    if kept is None:
+        raise ValueError(f"give a reason of at least {MIN_LENGTH} characters")
+    return kept
+
+
+Reason = Annotated[str, Field(min_length=MIN_LENGTH, max_length=2000), AfterValidator(_required)]

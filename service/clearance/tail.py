@@ -10,17 +10,15 @@ from sqlalchemy import select
 import tail_check
 from ingest.handlers import Derivation, handles
 from ingest.models import Snapshot
-from ingest.snapshots import image_path, load_bgr
+from ingest.snapshots import load_bgr, stored_image
 from service.clearance import service
 from service.clearance.evidence import run_at, side_of
 from service.settings import get_settings
 from tail_check.profile import CameraProfile
 
-SUFFIX = {"image/jpeg": ".jpg", "image/png": ".png"}
-
 
 def snapshot_file(snapshot: Snapshot) -> Path:
-    return image_path(get_settings().image_dir, snapshot.sha256, SUFFIX[snapshot.content_type])
+    return stored_image(get_settings().image_dir, snapshot.sha256, snapshot.content_type)
 
 
 def camera_profile(device_id: str) -> Any:

@@ -11,6 +11,7 @@ from service.database import DbSession, utcnow
 from service.errors import DepotError
 from service.fleet import service, views
 from service.fleet.chart import cached_chart
+from service.reasons import meaningful
 from service.review.router import _who, templates
 
 router = APIRouter(tags=["review screen"], include_in_schema=False)
@@ -64,11 +65,11 @@ def fleet_decide(
     who = _who(request, session)
     if who is None or who.role not in DECIDERS:
         return RedirectResponse("/review/login", status_code=303)
-    if action not in ACTION_WORDS or len(reason.strip()) < 3:
+    if action not in ACTION_WORDS or (kept := meaningful(reason)) is None:
         notice = "Give a reason of at least 3 characters."
     else:
         try:
-            service.record_override(session, car_id, action, reason.strip(), who, utcnow())
+            service.record_override(session, car_id, action, kept, who, utcnow())
             notice = f"Car {car_id}: {ACTION_WORDS[action]}."
         except DepotError as exc:
             notice = exc.detail

@@ -20,6 +20,7 @@ from service.clearance.router import (
 )
 from service.database import DbSession, utcnow
 from service.errors import DepotError
+from service.reasons import meaningful
 from service.review.service import STATE_WORDS, aligned_rows, build_screen
 from service.settings import get_settings
 
@@ -103,11 +104,11 @@ def decide(
         return RedirectResponse("/review/login", status_code=303)
     if who.role not in ("dispatcher", "admin"):
         notice = "Only a dispatcher may clear or block a section."
-    elif action not in ("clear", "keep_blocked") or len(reason.strip()) < 3:
+    elif action not in ("clear", "keep_blocked") or (kept := meaningful(reason)) is None:
         notice = "Give a reason of at least 3 characters."
     else:
         try:
-            clearance.act(session, run_id, action, reason.strip(), who, utcnow())
+            clearance.act(session, run_id, action, kept, who, utcnow())
             notice = f"Run {run_id}: {'cleared' if action == 'clear' else 'kept blocked'}."
         except DepotError as exc:
             notice = exc.detail
