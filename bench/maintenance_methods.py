@@ -1,23 +1,19 @@
 """The weighting methods compared on the simulated fleet (issue 6's accuracy table).
 
-Run: .venv/bin/python bench/maintenance_methods.py — weights and index band calibrated on a
+Run: .venv/bin/python -m bench.maintenance_methods — weights and index band calibrated on a
 reference fleet (seed 1, 800 cars), then a 1,000-car test fleet (seed 3) flagged at risk ≥ 0.5
 with a 30-step horizon; recall and the false share of flagged cars per method.
 """
 
 from __future__ import annotations
 
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from maintenance import METHODS  # noqa: E402
-from maintenance.evaluation import compare_methods  # noqa: E402
-from maintenance.simulate import simulate_fleet  # noqa: E402
+from maintenance import METHODS
+from maintenance.evaluation import compare_methods
+from maintenance.simulate import simulate_fleet
 
 
 def methods_table() -> None:

@@ -13,8 +13,8 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
+from core.models import Device
 from ingest.models import RawEvent
-from service.setup.models import Device
 
 
 @dataclass(frozen=True)

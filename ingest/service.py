@@ -13,11 +13,11 @@ from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.exc import InterfaceError, OperationalError, PendingRollbackError
 from sqlalchemy.orm import Session
 
+from core.errors import Conflict, Forbidden, Unprocessable, validation_errors
+from core.models import Device, Section
 from ingest.handlers import HANDLERS, Derivation, derive
 from ingest.models import RawEvent
 from ingest.schemas import ALLOWED_KINDS, EVENT_ADAPTER, EVENT_KINDS, TailSnapshot
-from service.errors import Conflict, Forbidden, Unprocessable, validation_errors
-from service.setup.models import Device, Section
 
 log = logging.getLogger("depot.ingest")
 
@@ -136,7 +136,7 @@ def run_derivation(
             return derive(derivation)
     except (OperationalError, InterfaceError, PendingRollbackError):
         raise  # the database itself failed: nothing is acknowledged, the device retries
-    except Exception as exc:  # noqa: BLE001 - the raw event is kept; the fault is recorded
+    except Exception as exc:
         log.exception("deriving from %s/%s failed", device.id, raw.event_id)
         raw.derive_error = f"{type(exc).__name__}: {exc}"
         return {"derive_error": raw.derive_error}

@@ -6,12 +6,12 @@ from typing import Any
 
 from sqlalchemy import select
 
+from core.models import Car
 from identification import manchester, time_pulse, wheel_marks
 from identification.consist import majority_number
 from ingest.handlers import Derivation, handles
 from service.clearance import service
 from service.clearance.models import AxleReading, CarPassage, WheelMarking
-from service.setup.models import Car
 
 
 @handles("train_departed")

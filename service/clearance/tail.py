@@ -8,12 +8,12 @@ from typing import Any
 from sqlalchemy import select
 
 import tail_check
+from core.settings import get_settings
 from ingest.handlers import Derivation, handles
 from ingest.models import Snapshot
 from ingest.snapshots import load_bgr, stored_image
 from service.clearance import service
 from service.clearance.evidence import run_at, side_of
-from service.settings import get_settings
 from tail_check.profile import CameraProfile
 
 

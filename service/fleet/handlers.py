@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from core.models import Car
 from ingest.handlers import Derivation, handles
 from service.fleet.service import record_measurements
-from service.setup.models import Car
 
 
 @handles("measurement")
