@@ -92,7 +92,7 @@ def create_app() -> FastAPI:
     logging.basicConfig(
         level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
     )
-    assert features.LOADED
+    features.install()
     app = FastAPI(
         title="depot",
         version="0.1.0",

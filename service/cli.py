@@ -58,7 +58,7 @@ def _replay(_: argparse.Namespace) -> int:
     from service import features
     from service.replay import replay
 
-    assert features.LOADED
+    features.install()
     with get_sessionmaker().begin() as session:
         counts = replay(session)
     print(
