@@ -24,12 +24,17 @@ class MeasurementIn(StrictModel):
     values: MeasuredValues
 
 
+# No railway quantity comes near this in any unit; beyond it the band arithmetic overflows.
+MAX_MAGNITUDE = 1e15
+
+
 class ParameterIn(StrictModel):
     """A measured parameter and its tolerance band ``nominal ± tolerance``."""
 
     name: ParameterName
-    nominal: Annotated[float, Field(allow_inf_nan=False)]
-    tolerance: Annotated[float, Field(gt=0, allow_inf_nan=False)]
+    # Bounded so that the band's edges nominal ± tolerance stay finite numbers.
+    nominal: Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)]
+    tolerance: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)]
     unit: Annotated[str, Field(max_length=16)] = ""
     description: Annotated[str, Field(max_length=2000)] = ""
 
