@@ -85,3 +85,49 @@ class SectionCreated(BaseModel):
     mode: str
     state: str = Field(description="free until the first train departs")
     run: None = Field(default=None, description="no run holds a new section")
+
+
+class UserIn(StrictModel):
+    name: Identifier
+    role: Literal["dispatcher", "engineer"]
+    expires_in_days: Annotated[float, Field(gt=0, le=3650)] | None = Field(
+        default=None, description="the token stops working after this many days (none: never)"
+    )
+
+
+class TokenRotateIn(StrictModel):
+    expires_in_days: Annotated[float, Field(gt=0, le=3650)] | None = None
+
+
+class UserOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+    name: str
+    role: str
+    created_at: Instant
+    expires_at: Instant | None
+    revoked_at: Instant | None
+
+
+class UserToken(UserOut):
+    token: str = Field(description="the bearer token; shown once, store it now")
+
+
+class DeviceKey(BaseModel):
+    device: str
+    key: str = Field(description="the new device key; shown once. The old key stops at once.")
+
+
+class DeviceDecommissioned(BaseModel):
+    device: str
+    decommissioned_at: Instant
+
+
+class CredentialChangeOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+    id: int
+    recorded_at: Instant
+    actor: str
+    action: str
+    subject_kind: str
+    subject: str
+    detail: str
