@@ -35,7 +35,7 @@ def bench_database(name: str) -> str:
             connection.execute(text(f'CREATE DATABASE "{name}"'))
         engine.dispose()
         return base.rsplit("/", 1)[0] + f"/{name}"
-    except Exception as exc:  # noqa: BLE001 - fall back and say so
+    except Exception as exc:
         print(f"(PostgreSQL unavailable: {type(exc).__name__}; using SQLite)")
         return f"sqlite:///{tempfile.mkdtemp()}/bench.sqlite3"
 

@@ -5,15 +5,12 @@ batched throughput. Bounded in count and time."""
 from __future__ import annotations
 
 import statistics
-import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
 
 import httpx
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _server import admin, bench_database, serve  # noqa: E402
+from bench._server import admin, bench_database, serve
 
 DEVICES = 50
 SINGLE_PER_DEVICE = 100

@@ -1,6 +1,6 @@
 """The weighting methods compared on the simulated fleet (issue 6's accuracy table).
 
-Run: .venv/bin/python bench/maintenance_methods.py — weights and index band calibrated on a
+Run: .venv/bin/python -m bench.maintenance_methods — weights and index band calibrated on a
 reference fleet (seed 1, 800 cars), then a 1,000-car test fleet (seed 3) flagged at risk ≥ 0.5
 with a 30-step horizon; recall and the false share of flagged cars per method. Then, if
 the NASA C-MAPSS FD001 files are present (../shared/data/real/cmapss_fd001), the remaining-life
@@ -10,19 +10,16 @@ engines, and the index weights per sensor.
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from maintenance import METHODS  # noqa: E402
-from maintenance.cmapss import evaluate, pseudo_split  # noqa: E402
-from maintenance.evaluation import compare_methods  # noqa: E402
-from maintenance.life_index import INDEX_METHODS  # noqa: E402
-from maintenance.simulate import simulate_fleet  # noqa: E402
+from maintenance import METHODS
+from maintenance.cmapss import evaluate, pseudo_split
+from maintenance.evaluation import compare_methods
+from maintenance.life_index import INDEX_METHODS
+from maintenance.simulate import simulate_fleet
 
 FD001 = next(
     (

@@ -1,6 +1,6 @@
 """End-to-end fleet forecast job: read stored histories, assess, write forecasts (cars/s).
 
-Run: .venv/bin/python bench/maintenance_service.py [--cars 10000] [--tests 200] [--limit 900]
+Run: .venv/bin/python -m bench.maintenance_service [--cars 10000] [--tests 200] [--limit 900]
 
 A fresh PostgreSQL database (SQLite when PostgreSQL is unreachable) is migrated and filled
 with N cars × 20 parameters × 200 bench tests (``maintenance.simulate``, bulk-loaded with a
@@ -21,37 +21,32 @@ from __future__ import annotations
 import argparse
 import os
 import signal
-import sys
 import time
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from sqlalchemy import create_engine, insert, text
+from sqlalchemy.orm import Session
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.append(str(ROOT / "bench"))  # after ROOT: bench/maintenance.py must not shadow the package
-
-from _server import bench_database  # noqa: E402
-from sqlalchemy import create_engine, insert, text  # noqa: E402
-from sqlalchemy.orm import Session  # noqa: E402
-
-from maintenance.simulate import PARAMETERS, simulate_fleet  # noqa: E402
-from service.database import make_engine  # noqa: E402
-from service.fleet import forecasts  # noqa: E402
-from service.fleet.calibration import SAMPLE_CARS  # noqa: E402
-from service.fleet.history import histories, load_bands  # noqa: E402
-from service.fleet.models import (  # noqa: E402
+from bench._server import bench_database
+from core.database import make_engine
+from core.models import Car
+from maintenance.simulate import PARAMETERS, simulate_fleet
+from service.fleet import forecasts
+from service.fleet.calibration import SAMPLE_CARS
+from service.fleet.history import histories, load_bands
+from service.fleet.models import (
     READINGS_DTYPE,
     Measurement,
     Parameter,
     encode_readings,
 )
-from service.fleet.service import layout_id  # noqa: E402
-from service.migrate import upgrade  # noqa: E402
-from service.setup.models import Car  # noqa: E402
+from service.fleet.service import layout_id
+from service.migrate import upgrade
 
+ROOT = Path(__file__).resolve().parents[1]
 END = datetime(2026, 11, 23, tzinfo=UTC)
 PG_EPOCH = datetime(2000, 1, 1, tzinfo=UTC)
 DATABASE = "depot_bench_fleet_job"
@@ -91,7 +86,8 @@ def fill(session: Session, n_cars: int, n_tests: int) -> int:
     postgres = session.get_bind().dialect.name == "postgresql"
     copy_sql = ("COPY measurements (car_id, taken_at, layout_id, readings, source)"
                 " FROM STDIN (FORMAT BINARY)")  # fmt: skip
-    cursor = session.connection().connection.driver_connection.cursor() if postgres else None
+    driver = session.connection().connection.driver_connection
+    cursor = driver.cursor() if postgres and driver is not None else None
     for start in range(0, n_cars, SIM_CHUNK):
         size = min(SIM_CHUNK, n_cars - start)
         fleet = simulate_fleet(size, n_times=n_tests, seed=1 + start)

@@ -11,18 +11,18 @@ from fastapi.responses import JSONResponse
 from pydantic import ValidationError
 from starlette.datastructures import UploadFile
 
-from ingest import service
-from ingest.schemas import EventBatch
-from ingest.snapshots import check_image, store_image
-from service.auth import CurrentDevicePrincipal
-from service.database import DbSession
-from service.errors import (
+from core.auth import CurrentDevicePrincipal
+from core.database import DbSession
+from core.errors import (
     PayloadTooLarge,
     Unprocessable,
     UnsupportedMediaType,
     validation_errors,
 )
-from service.settings import get_settings
+from core.settings import get_settings
+from ingest import service
+from ingest.schemas import EventBatch
+from ingest.snapshots import check_image, store_image
 
 router = APIRouter(tags=["devices"])
 

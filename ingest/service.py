@@ -13,11 +13,11 @@ from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.exc import InterfaceError, OperationalError, PendingRollbackError
 from sqlalchemy.orm import Session
 
-from ingest.handlers import HANDLERS, Derivation, derive
+from core.errors import Conflict, Forbidden, Unprocessable, validation_errors
+from core.models import Device, Section
+from ingest.handlers import Derivation, derive, has_handlers
 from ingest.models import RawEvent
 from ingest.schemas import ALLOWED_KINDS, EVENT_ADAPTER, EVENT_KINDS, TailSnapshot
-from service.errors import Conflict, Forbidden, Unprocessable, validation_errors
-from service.setup.models import Device, Section
 
 log = logging.getLogger("depot.ingest")
 
@@ -118,7 +118,7 @@ def store_event(
             )
         return 200, existing.result
     derived = run_derivation(session, raw, event, device)
-    if HANDLERS.get(event.kind):
+    if has_handlers(event.kind):
         raw.result = {"event_id": event.event_id, "status": "created", **derived}
     session.flush()
     return 201, raw.result
@@ -129,14 +129,14 @@ def run_derivation(
 ) -> dict[str, Any]:
     """Derive state from a stored event; a failing derivation never loses the raw event."""
     derivation = Derivation(session, raw, event, device, replaying)
-    if not HANDLERS.get(raw.kind):
+    if not has_handlers(raw.kind):
         return derive(derivation)  # liveness only: nothing that can fail half-way
     try:
         with session.begin_nested():
             return derive(derivation)
     except (OperationalError, InterfaceError, PendingRollbackError):
         raise  # the database itself failed: nothing is acknowledged, the device retries
-    except Exception as exc:  # noqa: BLE001 - the raw event is kept; the fault is recorded
+    except Exception as exc:
         log.exception("deriving from %s/%s failed", device.id, raw.event_id)
         raw.derive_error = f"{type(exc).__name__}: {exc}"
         return {"derive_error": raw.derive_error}
@@ -188,7 +188,7 @@ def _validated(
 
 def _raw_values(device: Device, event: Any, body: dict[str, Any]) -> dict[str, Any]:
     # Events no feature derives from answer just "created": store that answer with the row.
-    derived = bool(HANDLERS.get(event.kind))
+    derived = has_handlers(event.kind)
     return {
         "device_id": device.id,
         "event_id": event.event_id,
@@ -239,7 +239,7 @@ def accept_batch(session: Session, device: Device, items: list[Any]) -> list[dic
                 continue
         else:
             derived = run_derivation(session, raw, event, device)
-            if HANDLERS.get(event.kind):
+            if has_handlers(event.kind):
                 raw.result = {"event_id": event.event_id, "status": "created", **derived}
             status, result = 201, raw.result
         results[index] = {

@@ -10,10 +10,11 @@ from collections.abc import Sequence
 
 from sqlalchemy.exc import IntegrityError
 
+from core.database import get_sessionmaker
+from core.errors import DepotError
+from core.settings import get_settings
 from service import commands
-from service.database import get_sessionmaker
-from service.errors import DepotError
-from service.settings import get_settings
+from service.commands._common import fail
 
 
 def _serve(args: argparse.Namespace) -> int:
@@ -57,7 +58,7 @@ def _replay(_: argparse.Namespace) -> int:
     from service import features
     from service.replay import replay
 
-    assert features.LOADED
+    features.install()
     with get_sessionmaker().begin() as session:
         counts = replay(session)
     print(
@@ -117,11 +118,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args))
     except DepotError as exc:
-        print(f"depot: {exc.detail}", file=sys.stderr)
-        return 2
+        return fail(exc.detail)
     except IntegrityError as exc:
-        print(f"depot: the database refused the change ({exc.orig})", file=sys.stderr)
-        return 2
+        return fail(f"the database refused the change ({exc.orig})")
 
 
 if __name__ == "__main__":

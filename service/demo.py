@@ -17,11 +17,11 @@ import numpy as np
 from fastapi.testclient import TestClient
 from sqlalchemy import select
 
+from core.database import get_sessionmaker
+from core.models import Station
+from core.settings import get_settings
 from identification.simulate import ir_pulses_passage, wheel_mark_passage
-from service.database import get_sessionmaker
 from service.fleet.demo import load_fleet_history
-from service.settings import get_settings
-from service.setup.models import Station
 from tail_check.synth import render_snapshot
 
 STATIONS = (("A", "Anan'iv"), ("B", "Birzula"), ("C", "Podilsk"))

@@ -8,7 +8,7 @@ from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 from sqlalchemy import text
 
-from service.database import DbSession
+from core.database import DbSession
 from service.migrate import current_revision, head_revision
 
 router = APIRouter(tags=["health"])
@@ -25,7 +25,7 @@ def readyz(session: DbSession) -> Any:
         connection = session.connection()
         connection.execute(text("SELECT 1"))
         revision = current_revision(connection)
-    except Exception as exc:  # noqa: BLE001 - any database failure means "not ready"
+    except Exception as exc:
         return JSONResponse(
             {"status": "unavailable", "detail": f"database unreachable: {type(exc).__name__}"},
             status_code=503,

@@ -9,12 +9,12 @@ from typing import Any
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
+from core.models import Car, Device, Section
+from core.settings import get_settings
 from identification.consist import compare_consists
 from ingest.models import RawEvent, Snapshot
 from service.clearance.models import AxleReading, CarPassage, Run
 from service.clearance.rules import ConsistEvidence, RunEvidence, TailEvidence
-from service.settings import get_settings
-from service.setup.models import Car, Device, Section
 from service.setup.service import section_devices
 from tail_check.profile import CameraProfile
 

@@ -8,8 +8,8 @@ from typing import Any
 from sqlalchemy import JSON, Boolean, ForeignKey, Integer, String, Text
 from sqlalchemy.orm import Mapped, mapped_column
 
+from core.database import Base, UTCDateTime, utcnow
 from ingest.models import BigId
-from service.database import Base, UTCDateTime, utcnow
 
 
 class Run(Base):

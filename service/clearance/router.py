@@ -9,17 +9,17 @@ from fastapi.responses import FileResponse, Response
 from sqlalchemy import or_, select
 
 import tail_check
+from core.auth import CurrentDispatcher, CurrentReader
+from core.database import DbSession, utcnow
+from core.errors import NotFound
+from core.models import Section
 from ingest.models import Snapshot
 from ingest.snapshots import load_bgr
-from service.auth import CurrentDispatcher, CurrentReader
 from service.clearance import service
 from service.clearance.models import AuditRecord, Run, WheelMarking
 from service.clearance.schemas import DecisionIn
 from service.clearance.tail import camera_profile, snapshot_file
 from service.clearance.views import audit_out, run_out, section_out
-from service.database import DbSession, utcnow
-from service.errors import NotFound
-from service.setup.models import Section
 
 router = APIRouter(tags=["dispatcher"])
 MAX_ROW_ID = 2**63 - 1

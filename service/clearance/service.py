@@ -8,13 +8,13 @@ from typing import Any
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
+from core.auth import Principal
+from core.errors import Conflict, NotFound
+from core.models import Section
 from ingest.models import Snapshot
-from service.auth import Principal
 from service.clearance.evidence import EVIDENCE_WINDOW, gather, run_at, side_of
 from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run
 from service.clearance.rules import decide, section_state
-from service.errors import Conflict, NotFound
-from service.setup.models import Section
 
 BUSY_STATES = ("occupied", "awaiting_confirmation", "review", "alarm", "blocked")
 

@@ -8,8 +8,8 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from core.models import Section
 from service.clearance.models import AuditRecord, Run
-from service.setup.models import Section
 
 QUEUE_STATES = ("alarm", "review", "awaiting_confirmation", "blocked")
 

@@ -23,14 +23,14 @@ import numpy as np
 from sqlalchemy import JSON, Text, bindparam, cast, insert, select
 from sqlalchemy.orm import Session
 
+from core.database import utcnow
+from core.errors import Unprocessable
+from core.models import Car
 from maintenance.fleet import CarAssessment, assess_car
-from service.database import utcnow
-from service.errors import Unprocessable
 from service.fleet.calibration import SAMPLE_CARS, FleetIndex, calibrate
 from service.fleet.history import Bands, CarHistory, empty_history, histories, load_bands
 from service.fleet.models import Forecast
 from service.fleet.vectorised import Outcome, batch_assessments, payload_of
-from service.setup.models import Car
 
 log = logging.getLogger("depot.fleet")
 Progress = Callable[[int, int], None]

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from ingest.handlers import Derivation, handles
+from core.models import Car
+from ingest.handlers import Derivation
 from service.fleet.service import record_measurements
-from service.setup.models import Car
 
 
-@handles("measurement")
-def _measured(d: Derivation) -> dict[str, Any]:
+def measurement(d: Derivation) -> dict[str, Any]:
     car_id = d.event.car
     if d.session.get(Car, car_id) is None:
         # The raw event is kept (replay derives it again once the car is registered).

@@ -15,11 +15,11 @@ from typing import TextIO
 from sqlalchemy import insert, select
 from sqlalchemy.orm import Session
 
+from core.errors import Unprocessable
+from core.models import Car
 from ingest.schemas import EARLIEST, LATEST
-from service.errors import Unprocessable
 from service.fleet.models import Measurement
 from service.fleet.service import measurement_row
-from service.setup.models import Car
 
 KEYS = ("car", "taken_at")
 LONG = ("parameter", "value")

@@ -9,8 +9,8 @@ import numpy as np
 from sqlalchemy import JSON, Float, ForeignKey, Index, Integer, LargeBinary, String, Text
 from sqlalchemy.orm import Mapped, mapped_column
 
+from core.database import Base, UTCDateTime, utcnow
 from ingest.models import BigId
-from service.database import Base, UTCDateTime, utcnow
 
 # A test's values in the order of its layout's names, as little-endian float64 bytes (numpy
 # reads them without parsing; PostgreSQL concatenates a car's tests with string_agg). Read and

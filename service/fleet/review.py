@@ -7,8 +7,8 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Form, Request
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
-from service.database import DbSession, utcnow
-from service.errors import DepotError
+from core.database import DbSession, utcnow
+from core.errors import DepotError
 from service.fleet import service, views
 from service.fleet.chart import cached_chart
 from service.reasons import meaningful

@@ -7,9 +7,9 @@ from typing import Any
 from fastapi import APIRouter, Body
 from fastapi.responses import Response
 
-from service.auth import CurrentEngineer, CurrentReader
-from service.database import DbSession, utcnow
-from service.errors import NotFound
+from core.auth import CurrentEngineer, CurrentReader
+from core.database import DbSession, utcnow
+from core.errors import NotFound
 from service.fleet import service, views
 from service.fleet.chart import cached_chart
 from service.fleet.forecasts import ForecastOptions, run_forecasts

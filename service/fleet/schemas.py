@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
+from core.schemas import StrictModel
 from ingest.schemas import DeviceTime, MeasuredValues
 from service.reasons import Reason
 
@@ -16,10 +17,6 @@ ParameterName = Annotated[
 # finds faulty tests in the stored history (422 otherwise).
 WeightsMethod = Literal["prediction", "inverse_variance", "rayleigh", "equal", "fisher"]
 WEIGHTS_METHODS: tuple[str, ...] = ("prediction", "inverse_variance", "rayleigh", "equal", "fisher")
-
-
-class StrictModel(BaseModel):
-    model_config = ConfigDict(extra="forbid")
 
 
 class MeasurementIn(StrictModel):

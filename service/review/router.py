@@ -9,7 +9,10 @@ from fastapi import APIRouter, Form, Query, Request
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from fastapi.templating import Jinja2Templates
 
-from service.auth import Principal, person_for_token
+from core.auth import Principal, person_for_token
+from core.database import DbSession, utcnow
+from core.errors import DepotError
+from core.settings import get_settings
 from service.clearance import service as clearance
 from service.clearance.router import (
     MAX_ROW_ID,
@@ -18,11 +21,8 @@ from service.clearance.router import (
     get_snapshot_image,
     get_snapshot_overlay,
 )
-from service.database import DbSession, utcnow
-from service.errors import DepotError
 from service.reasons import meaningful
 from service.review.service import STATE_WORDS, aligned_rows, build_screen
-from service.settings import get_settings
 
 COOKIE = "depot_review"
 templates = Jinja2Templates(directory=str(Path(__file__).parent / "templates"))

@@ -7,10 +7,10 @@ from typing import Any
 from fastapi import APIRouter
 from sqlalchemy import select
 
-from service.auth import Admin, CurrentReader
-from service.database import DbSession
+from core.auth import Admin, CurrentReader
+from core.database import DbSession
+from core.models import Car, Device, Station
 from service.setup import service
-from service.setup.models import Car, Device, Station
 from service.setup.schemas import (
     CarIn,
     CarOut,

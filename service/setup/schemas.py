@@ -7,7 +7,8 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from service.setup.models import DEVICE_KINDS
+from core.models import DEVICE_KINDS
+from core.schemas import StrictModel
 
 Identifier = Annotated[
     str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
@@ -16,10 +17,6 @@ DeviceIdentifier = Annotated[
     str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 ]
 DeviceKind = Literal[DEVICE_KINDS]  # type: ignore[valid-type]
-
-
-class StrictModel(BaseModel):
-    model_config = ConfigDict(extra="forbid")
 
 
 class StationIn(StrictModel):

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-from datetime import datetime, timedelta
-
 from sqlalchemy import or_, select
 from sqlalchemy.orm import Session
 
-from service.auth import hash_secret, new_secret
-from service.errors import Conflict, NotFound, Unprocessable
-from service.setup.models import ROLES, Car, Device, Section, Station, User
+from core.auth import hash_secret, new_secret
+from core.errors import Conflict, NotFound, Unprocessable
+from core.models import ROLES, Car, Device, Section, Station, User
 from service.setup.schemas import CarIn, DeviceIn, SectionIn, StationIn
 
 
@@ -112,10 +110,3 @@ def section_devices(session: Session, section: Section, station: str) -> list[De
             .order_by(Device.id)
         )
     )
-
-
-def is_stale(device: Device, at: datetime, heartbeat_s: float) -> bool:
-    """A device silent for longer than its heartbeat period counts as stale at ``at``."""
-    if device.last_seen_at is None:
-        return True
-    return at - device.last_seen_at > timedelta(seconds=heartbeat_s)

@@ -7,8 +7,8 @@ from typing import Any
 from fastapi import APIRouter
 from sqlalchemy import select
 
-from service.auth import Admin, CurrentReader
-from service.database import DbSession
+from core.auth import Admin, CurrentReader
+from core.database import DbSession
 from service.trains import service
 from service.trains.models import TrackMarker
 from service.trains.schemas import MarkerIn, MarkerOut

@@ -115,7 +115,7 @@ def test_access_matrix(
 
 AT = "2026-11-23T10:00:00Z"
 # protocol.md, "Device events": kind → example fields and the device kinds that may send it.
-EVENT_KINDS: dict[str, tuple[dict[str, Any], frozenset[str]]] = {
+PROTOCOL_EVENTS: dict[str, tuple[dict[str, Any], frozenset[str]]] = {
     "train_departed": ({"section": "AB", "train": "2041"}, frozenset({"interlocking"})),
     "train_arrived": ({"section": "AB", "train": "2041"}, frozenset({"interlocking"})),
     "axle_count": ({"section": "AB", "axles": 16}, frozenset({"axle_counter"})),
@@ -150,11 +150,11 @@ EVENT_KINDS: dict[str, tuple[dict[str, Any], frozenset[str]]] = {
 }
 
 
-@pytest.mark.parametrize("kind", list(EVENT_KINDS))
+@pytest.mark.parametrize("kind", list(PROTOCOL_EVENTS))
 def test_device_kinds_send_only_their_events(
     kind: str, client: TestClient, credentials: dict[str, dict[str, str]]
 ) -> None:
-    fields, senders = EVENT_KINDS[kind]
+    fields, senders = PROTOCOL_EVENTS[kind]
     wrong = []
     for role in DEVICE_ROLES:
         device_kind = role.split(":")[1]

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from service import database
+from core import database
+from core.settings import get_settings
 from service.cli import main
-from service.settings import get_settings
 
 
 @pytest.fixture

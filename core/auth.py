@@ -13,10 +13,10 @@ from fastapi.security import APIKeyHeader, HTTPAuthorizationCredentials, HTTPBea
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from service.database import DbSession
-from service.errors import Forbidden, Unauthorized
-from service.settings import get_settings
-from service.setup.models import Device, User
+from core.database import DbSession
+from core.errors import Forbidden, Unauthorized
+from core.models import Device, User
+from core.settings import get_settings
 
 _bearer = HTTPBearer(auto_error=False, description="admin token or a person's token")
 _device_key = APIKeyHeader(name="X-Device-Key", auto_error=False, description="device key")

@@ -7,7 +7,7 @@ from datetime import datetime
 from sqlalchemy import ForeignKey, Integer, String
 from sqlalchemy.orm import Mapped, mapped_column
 
-from service.database import Base, UTCDateTime, utcnow
+from core.database import Base, UTCDateTime, utcnow
 
 DEVICE_KINDS = (
     "interlocking",
