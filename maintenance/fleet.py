@@ -160,7 +160,7 @@ def _parameter_exit(ind: FloatArray, horizon: int) -> FloatArray:
     return np.asarray(np.clip(ndtr((lo - at) / sd) + ndtr((at - hi) / sd), 0, 1))
 
 
-def _reasons(
+def assessment_reasons(
     names: tuple[str, ...], ind_last: FloatArray, contrib: FloatArray, fc: Forecast,
     band: tuple[float, float], horizon: int, times_ahead: FloatArray,
 ) -> tuple[str, ...]:  # fmt: skip
@@ -280,7 +280,7 @@ def assess_car(
     recent = ind[-window:] if window is not None else ind
     p_out = _parameter_exit(recent, steps)
     kk = min(check_positive_int(k, "k"), data.shape[1])
-    reasons = _reasons(labels, ind[-1], contrib, fc, ib, steps, ahead)
+    reasons = assessment_reasons(labels, ind[-1], contrib, fc, ib, steps, ahead)
     return CarAssessment(
         status="ok",
         car_id=car_id,
