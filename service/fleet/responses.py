@@ -31,6 +31,8 @@ class ParameterOut(Answer):
     upper: float = Field(description="nominal + tolerance: the band's upper edge")
     unit: str
     description: str | None = None
+    plausible_lower: float = Field(description="values below this are refused")
+    plausible_upper: float = Field(description="values above this are refused")
 
 
 class CarRisk(Answer):

@@ -22,6 +22,7 @@ from service.fleet.responses import (
     OverrideOut,
     ParameterOut,
 )
+from service.fleet.rules import plausible_range, refuse_implausible, registered
 from service.fleet.schemas import ForecastRunIn, MaintenanceDecisionIn, MeasurementIn, ParameterIn
 
 router = APIRouter(tags=["maintenance"])
@@ -39,6 +40,8 @@ def _parameter_out(parameter: Parameter) -> dict[str, Any]:
         "upper": parameter.nominal + parameter.tolerance,
         "unit": parameter.unit,
         "description": parameter.description,
+        "plausible_lower": plausible_range(parameter)[0],
+        "plausible_upper": plausible_range(parameter)[1],
     }
 
 
@@ -47,6 +50,7 @@ def post_measurements(
     car_id: str, body: MeasurementIn, session: DbSession, _: CurrentEngineer
 ) -> dict[str, Any]:
     service.require_car(session, car_id)
+    refuse_implausible(registered(session), body.values)
     stored = service.record_measurements(session, car_id, body.taken_at, body.values, source="api")
     return {"car": car_id, "taken_at": body.taken_at.isoformat(), "measurements": stored}
 

@@ -37,6 +37,12 @@ class ParameterIn(StrictModel):
     tolerance: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)]
     unit: Annotated[str, Field(max_length=16)] = ""
     description: Annotated[str, Field(max_length=2000)] = ""
+    plausible_lower: (
+        Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None
+    ) = Field(default=None, description="values below are refused (default: the band's)")
+    plausible_upper: (
+        Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None
+    ) = Field(default=None, description="values above are refused (default: the band's)")
 
 
 class ForecastRunIn(StrictModel):
