@@ -167,17 +167,21 @@ def assessment_reasons(
     out: list[str] = []
     lo, hi = band
     now = 1.0 + float(contrib.sum())
-    if fc.first_exit is not None:
+    if not lo <= now <= hi:
+        # Out already: saying "leaves its band 1 test ahead" would understate it.
+        out.append(f"already outside its band [{lo:.3f}, {hi:.3f}] now (index {now:.3f})")
+    elif fc.first_exit is not None:
+        ahead = "the next test" if fc.first_exit == 1 else f"{fc.first_exit} tests ahead"
         out.append(
-            f"index forecast leaves its band [{lo:.3f}, {hi:.3f}] at step {fc.first_exit} "
-            f"(t = {times_ahead[fc.first_exit - 1]:g}); risk {fc.risk:.0%} within {horizon} steps"
+            f"index forecast leaves its band [{lo:.3f}, {hi:.3f}] at {ahead} "
+            f"(t = {times_ahead[fc.first_exit - 1]:g}); risk {fc.risk:.0%} within {horizon} tests"
         )
     else:
         out.append(
-            f"index forecast stays inside [{lo:.3f}, {hi:.3f}] for {horizon} steps; "
+            f"index forecast stays inside [{lo:.3f}, {hi:.3f}] for the next {horizon} tests; "
             f"risk {fc.risk:.0%}"
         )
-    out.append(f"index now {now:.3f}, drifting {fc.slope:+.4f} per step")
+    out.append(f"index now {now:.3f}, drifting {fc.slope:+.4f} per test")
     order = np.argsort(-np.abs(contrib))
     top = [i for i in order[:3] if abs(contrib[i]) > 0.0]
     if top:
@@ -185,7 +189,7 @@ def assessment_reasons(
         out.append(f"largest contributions to the index deviation: {parts}")
     outside = [names[i] for i in np.flatnonzero((ind_last < 0.0) | (ind_last > 2.0))]
     if outside:
-        out.append(f"already out of tolerance: {', '.join(outside)}")
+        out.append(f"parameters already out of tolerance: {', '.join(outside)}")
     return tuple(out)
 
 

@@ -128,6 +128,14 @@ def _finite(value: Any) -> Any:
     return value
 
 
+def out_of_band_now(payload: dict[str, Any]) -> bool:
+    """Whether the car's latest index already lies outside its band."""
+    index, band = payload.get("index") or [], payload.get("index_band")
+    if not index or not band or index[-1] is None:
+        return False
+    return not band[0] <= index[-1] <= band[1]
+
+
 def forecast_row(
     history: CarHistory,
     bands: Bands,
@@ -139,11 +147,13 @@ def forecast_row(
     """The Forecast row (as insert values) of one car (``outcome``: assessed already)."""
     status, risk, payload = outcome or _outcome(history, bands, fleet, options)
     step = payload.get("first_exit")
-    if step is not None and payload.get("forecast"):
+    payload["out_of_band_now"] = out_of_band_now(payload)
+    if step is not None and payload.get("forecast") and not payload["out_of_band_now"]:
         # The package words the exit in days since the first test; engineers plan by the date.
         when = history.start + timedelta(days=payload["forecast"]["times"][step - 1])
+        ahead = "at the next test" if step == 1 else f"{step} tests ahead"
         payload["reasons"] = [
-            f"expected out of its index band by {when:%Y-%m-%d} ({step} tests ahead)",
+            f"expected to leave its index band by {when:%Y-%m-%d} ({ahead})",
             *payload.get("reasons", []),
         ]
     kept = list(payload.get("weights") or history.names)

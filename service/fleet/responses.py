@@ -85,6 +85,7 @@ class CarSummary(Answer):
     recommendation: str = Field(description="plan_withdrawal, watch, serviceable or unknown")
     decision: str
     first_exit: ExitStep | None
+    out_of_band_now: bool = Field(description="the latest index already lies outside its band")
     k_of_l_probability: float | None = None
     reasons: list[str]
     weights: dict[str, float]
@@ -98,7 +99,8 @@ class RankedCar(CarSummary):
 
 class FleetOut(Answer):
     computed_at: Instant | None
-    cars: list[RankedCar]
+    cars: list[RankedCar] = Field(description="cars in service, highest risk first")
+    withdrawn: list[CarSummary] = Field(description="cars an engineer withdrew from service")
 
 
 class IndexPoint(Answer):

@@ -188,6 +188,7 @@ def test_forecast_run_access_and_options(keys: dict, client: TestClient, dispatc
     assert client.get("/api/v1/maintenance/fleet", headers=dispatcher).json() == {
         "computed_at": None,
         "cars": [],
+        "withdrawn": [],
     }
 
 
@@ -217,7 +218,8 @@ def test_engineer_override_is_audited_and_shown(
     assert [o["action"] for o in body["overrides"]] == ["withdraw_now", "keep_in_service"]
     assert body["override"]["actor"] == "admin" and body["decision"] == "withdraw_now"
     fleet = client.get("/api/v1/maintenance/fleet", headers=dispatcher).json()
-    car = next(c for c in fleet["cars"] if c["car"] == "0118")
+    assert "0118" not in [c["car"] for c in fleet["cars"]]  # withdrawn cars leave the ranking
+    car = next(c for c in fleet["withdrawn"] if c["car"] == "0118")
     assert car["override"]["reason"] == "door actuator leaking"
     assert car["decision"] == "withdraw_now" and car["recommendation"] == "unknown"
     records = session.scalars(select(MaintenanceOverride)).all()
