@@ -241,8 +241,6 @@ def section_state(verdict: Verdict, mode: str) -> str:
 
 # A dispatcher may ask for a sweep only where nothing proves the section empty.
 SWEEP_FROM = frozenset({"alarm", "review", "blocked"})
-# States a section holds while a person or a sweep train must still prove it empty.
-CLOSED_STATES = frozenset({"review", "alarm", "blocked", "awaiting_sweep"})
 
 
 def next_state(current: str, verdict: Verdict, mode: str) -> str:

@@ -9,6 +9,7 @@ from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
 from core.auth import Principal
+from core.database import utcnow
 from core.errors import Conflict, NotFound
 from core.models import Section
 from ingest.models import Snapshot
@@ -161,7 +162,7 @@ def evaluate(
         run.decided_at = run.arrived_at
     at = run.arrived_at or run.departed_at
     if run.sweep and run.sweep_of is not None:
-        _record_sweep(session, run, section, at)
+        _record_sweep(session, run, section)
     if section.current_run_id == run.id:
         _set_state(section, next_state(section.state, verdict, section.mode), at)
         if section.state == "free":
@@ -170,7 +171,7 @@ def evaluate(
     return {"run": run.id, "verdict": verdict, "reasons": reasons, "section_state": section.state}
 
 
-def _record_sweep(session: Session, sweep: Run, section: Section, at: datetime) -> None:
+def _record_sweep(session: Session, sweep: Run, section: Section) -> None:
     """Link the swept run to its sweep run while (and only while) the sweep is complete.
 
     The audit gets one record per sweep that cleared a run, with both runs and the sweep's
@@ -198,7 +199,7 @@ def _record_sweep(session: Session, sweep: Run, section: Section, at: datetime) 
                 reason=describe_sweep(sweep.id, original.id, "complete"),
                 actor=SYSTEM.name,
                 actor_role=SYSTEM.role,
-                recorded_at=at,
+                recorded_at=utcnow(),  # when written, like every audit record
                 state_before="awaiting_sweep",
                 state_after=next_state("occupied", "complete", section.mode),
                 evidence={
@@ -232,6 +233,10 @@ def attach(
     """Attach a piece of evidence to the run holding the section then; re-decide if arrived."""
     section = lock_section(session, section_id)
     run = run_at(session, section_id, at)
+    # Departure-side devices see a train before it leaves; after the run has arrived they
+    # are seeing the next train (a sweep train, say), which adopts their evidence on departure.
+    if run is not None and run.arrived_at is not None and at > run.arrived_at:
+        run = None if station == run.from_station else run
     if run is None:
         row.run_id, row.side = None, None
         session.flush()
