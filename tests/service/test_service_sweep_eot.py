@@ -239,3 +239,29 @@ def test_replay_rebuilds_sweep_and_eot(line: Line, session: Session) -> None:
     assert _state(line.client) == before
     audit = line.client.get(f"/api/v1/audit?run={original}", headers=ADMIN).json()[::-1]
     assert [r["action"] for r in audit] == ["sweep", "cleared_by_sweep"]  # not written twice
+
+
+def test_review_screen_shows_sweep_button_state_sweep_run_and_eot(line: Line) -> None:
+    client = line.client
+    assert (
+        client.post("/review/login", data={"token": ADMIN["Authorization"][7:]}).status_code == 200
+    )
+    original = _into_review(line)
+    page = client.get(f"/review?run={original}").text
+    assert 'name="action" value="sweep"' in page and "Clear after a sweep train" in page
+    short = client.post(f"/review/runs/{original}/decision", data={"action": "sweep", "reason": ""})
+    assert "Give a reason of at least 3 characters." in short.text
+    assert line.section()["state"] == "review"
+    done = client.post(
+        f"/review/runs/{original}/decision",
+        data={"action": "sweep", "reason": "no image of the last car"},
+    )
+    assert "the section waits for a sweep train" in done.text
+    assert 'data-state="awaiting_sweep"' in done.text and "awaiting sweep" in done.text
+    assert 'value="sweep"' not in client.get(f"/review?run={original}").text  # asked once
+    sweep, _ = passage(line, LATER, train="2043", disc=None, eot_unit=39572, eot=[(39572, 89)])
+    page = client.get(f"/review?run={sweep}").text
+    assert 'id="sweep-run"' in page and f"run {original}" in page
+    assert 'id="eot"' in page and "89 psig" in page and "stands in for the tail disc" in page
+    assert "EOT unit 39572 at the rear reports 89 psig at arrival" in page
+    assert f"sweep run {sweep}" in client.get(f"/review?run={original}").text  # cleared by
