@@ -74,9 +74,7 @@ def fd001_table() -> None:
     print(f"\nindex weights ({shown.method}; index change per new→worn change of the sensor)")
     print(f"{'sensor':>6s} {'name':40s} {'weight':>7s} {'towards failure':>16s}")
     for w in shown.weights:
-        print(
-            f"{w.sensor:6d} {w.name:40s} {w.weight:7.3f} {w.direction:>6s} {w.worn_change:+9.4g}"
-        )
+        print(f"{w.sensor:6d} {w.name:40s} {w.weight:7.3f} {w.direction:>6s} {w.worn_change:+9.4g}")
     print(f"life fraction = {shown.scale:.3f}·index + {shown.offset:.3f}")
 
 

@@ -18,9 +18,18 @@ DEVICE_KINDS = (
     "marking_station",
     "test_bench",
     "onboard_unit",
+    "eot_receiver",
 )
 ROLES = ("dispatcher", "engineer")
-SECTION_STATES = ("free", "occupied", "awaiting_confirmation", "review", "alarm", "blocked")
+SECTION_STATES = (
+    "free",
+    "occupied",
+    "awaiting_confirmation",
+    "review",
+    "alarm",
+    "blocked",
+    "awaiting_sweep",
+)
 
 
 class Station(Base):

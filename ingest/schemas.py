@@ -6,9 +6,18 @@ import math
 from datetime import UTC, datetime
 from typing import Annotated, Any, ClassVar, Literal, get_args
 
-from pydantic import AfterValidator, AwareDatetime, BaseModel, ConfigDict, Field, TypeAdapter
+from pydantic import (
+    AfterValidator,
+    AwareDatetime,
+    BaseModel,
+    ConfigDict,
+    Field,
+    TypeAdapter,
+    model_validator,
+)
 
 from core.models import DEVICE_KINDS
+from identification.eot import PACKET_BITS, parse_packet
 
 EARLIEST = datetime(2000, 1, 1, tzinfo=UTC)
 LATEST = datetime(2100, 1, 1, tzinfo=UTC)
@@ -44,10 +53,15 @@ class SectionEvent(EventBase):
     section: SectionId
 
 
+EotUnitAddress = Annotated[int, Field(ge=0, le=2**17 - 1)]  # 17 bits on the air
+
+
 class TrainDeparted(SectionEvent):
     kind: Literal["train_departed"]
     senders = frozenset({"interlocking"})
     train: TrainNumber
+    # The end-of-train unit armed on this train, when it carries one (clearance.md, EOT).
+    eot_unit: EotUnitAddress | None = None
 
 
 class TrainArrived(SectionEvent):
@@ -139,6 +153,44 @@ class MotionSample(EventBase):
     gnss_lon: Annotated[float, Field(ge=-180, le=180, allow_inf_nan=False)] | None = None
 
 
+class EotStatus(SectionEvent):
+    """An EOT radio receiver's report of one packet from the unit on a train's last car."""
+
+    kind: Literal["eot_status"]
+    senders = frozenset({"eot_receiver"})
+    unit_address: EotUnitAddress
+    pressure_psig: Annotated[int, Field(ge=0, le=127)]
+    motion: bool | None = None
+    marker_light: bool | None = None
+    battery_charge: Annotated[int, Field(ge=0, le=127)] | None = None  # raw 7-bit value
+    bits: Annotated[str, Field(pattern=rf"^[01]{{{PACKET_BITS}}}$")] | None = None
+
+    @model_validator(mode="after")
+    def _packet_agrees(self) -> EotStatus:
+        """With the raw packet given, its BCH check must pass and its fields match ours."""
+        if self.bits is None:
+            return self
+        try:
+            packet = parse_packet(self.bits)
+        except ValueError:
+            raise ValueError("bits: the packet fails its frame sync or BCH check") from None
+        given = {
+            "unit_address": self.unit_address,
+            "pressure_psig": self.pressure_psig,
+            "motion": self.motion,
+            "marker_light": self.marker_light,
+            "battery_charge": self.battery_charge,
+        }
+        wrong = [
+            f"{name} {value} (the packet says {getattr(packet, name)})"
+            for name, value in given.items()
+            if value is not None and value != getattr(packet, name)
+        ]
+        if wrong:
+            raise ValueError("fields disagree with bits: " + "; ".join(wrong))
+        return self
+
+
 class Heartbeat(EventBase):
     kind: Literal["heartbeat"]
     senders = frozenset(DEVICE_KINDS)
@@ -155,6 +207,7 @@ DeviceEvent = Annotated[
     | WheelMarksWritten
     | Measurement
     | MotionSample
+    | EotStatus
     | Heartbeat,
     Field(discriminator="kind"),
 ]

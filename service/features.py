@@ -27,6 +27,7 @@ HANDLER_TABLE: HandlerTable = {
     ev.TailSnapshot: (tail.tail_snapshot,),
     ev.Measurement: (fleet.measurement,),
     ev.MotionSample: (trains.motion_sample,),
+    ev.EotStatus: (clearance.eot_status,),
     ev.Heartbeat: (),  # liveness only
 }
 

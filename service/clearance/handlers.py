@@ -11,12 +11,18 @@ from identification import manchester, time_pulse, wheel_marks
 from identification.consist import majority_number
 from ingest.handlers import Derivation
 from service.clearance import service
-from service.clearance.models import AxleReading, CarPassage, WheelMarking
+from service.clearance.models import AxleReading, CarPassage, EotReport, WheelMarking
 
 
 def train_departed(d: Derivation) -> dict[str, Any]:
     return service.open_run(
-        d.session, d.raw.id, d.event.section, d.device.station, d.event.train, d.event.occurred_at
+        d.session,
+        d.raw.id,
+        d.event.section,
+        d.device.station,
+        d.event.train,
+        d.event.occurred_at,
+        eot_unit=d.event.eot_unit,
     )
 
 
@@ -37,6 +43,25 @@ def axle_count(d: Derivation) -> dict[str, Any]:
     )
     d.session.add(row)
     return service.attach(d.session, row, d.event.section, d.device.station, d.event.occurred_at)
+
+
+def eot_status(d: Derivation) -> dict[str, Any]:
+    e = d.event
+    row = EotReport(
+        id=d.raw.id,
+        device_id=d.device.id,
+        station=d.device.station,
+        section=e.section,
+        occurred_at=e.occurred_at,
+        unit_address=e.unit_address,
+        pressure_psig=e.pressure_psig,
+        motion=e.motion,
+        marker_light=e.marker_light,
+        battery_charge=e.battery_charge,
+        bits=e.bits,
+    )
+    d.session.add(row)
+    return service.attach(d.session, row, e.section, d.device.station, e.occurred_at)
 
 
 def _decode_ir_pulses(event: Any) -> tuple[int | None, dict[str, Any]]:

@@ -150,6 +150,10 @@ PROTOCOL_EVENTS: dict[str, tuple[dict[str, Any], frozenset[str]]] = {
         frozenset({"test_bench", "onboard_unit"}),
     ),
     "motion_sample": ({"train": "2041", "t": 1.5, "accel_mps2": -0.4}, frozenset({"onboard_unit"})),
+    "eot_status": (
+        {"section": "AB", "unit_address": 39572, "pressure_psig": 89},
+        frozenset({"eot_receiver"}),
+    ),
     "heartbeat": ({}, frozenset(KIND_OF.values())),
 }
 

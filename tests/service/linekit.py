@@ -22,6 +22,7 @@ DEVICES = [
     ("D-mark", "A", None, "marking_station"),
     ("D-bench", "A", None, "test_bench"),
     ("T-obu", "A", None, "onboard_unit"),
+    ("B-eot", "B", "AB", "eot_receiver"),
 ]
 
 
