@@ -1,0 +1,188 @@
+"""Pinhole camera of a trackside mast, and the canvas the scene is painted on.
+
+World frame: X to the right as seen from the camera, Y up from rail top, Z
+along the track away from the camera (metres). The camera has no roll, so the
+horizon is a horizontal image row; the final mild rotation is applied to the
+whole image later (:mod:`._camera_fx`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+from ._config import BGR, FloatImage, FloatMap
+
+Vec3 = tuple[float, float, float]
+Points = npt.NDArray[np.float64]
+"""N×3 world points (metres) or N×2 image points (pixels)."""
+
+NEAR_Z = 0.3
+"""Closest camera depth kept when clipping polygons (metres)."""
+
+
+@dataclass(frozen=True)
+class Camera:
+    """Pinhole camera: focal length in pixels, centre, position and rotation.
+
+    ``rot`` rows are the camera's right, down and forward axes in world
+    coordinates; ``pos`` is the camera centre in metres.
+    """
+
+    width: int
+    height: int
+    focal: float
+    pos: Points
+    rot: Points
+
+    @staticmethod
+    def looking_at(width: int, height: int, focal: float, pos: Vec3, target: Vec3) -> Camera:
+        """Camera at ``pos`` aimed at ``target`` with a level horizon."""
+        eye = np.asarray(pos, dtype=np.float64)
+        forward = np.asarray(target, dtype=np.float64) - eye
+        forward /= np.linalg.norm(forward)
+        right = np.cross(np.array([0.0, 1.0, 0.0]), forward)
+        right /= np.linalg.norm(right)
+        down = -np.cross(forward, right)
+        down /= np.linalg.norm(down)
+        return Camera(width, height, focal, eye, np.stack([right, down, forward]))
+
+    @property
+    def k_matrix(self) -> Points:
+        """3×3 intrinsic matrix."""
+        return np.array(
+            [
+                [self.focal, 0.0, self.width / 2.0],
+                [0.0, self.focal, self.height / 2.0],
+                [0.0, 0.0, 1.0],
+            ]
+        )
+
+    def to_camera(self, points: Points) -> Points:
+        """World N×3 → camera N×3 (x right, y down, z forward)."""
+        result: Points = (np.asarray(points, dtype=np.float64) - self.pos) @ self.rot.T
+        return result
+
+    def project(self, points: Points) -> Points:
+        """World N×3 → image N×2 pixels (points must be in front of the camera)."""
+        cam = self.to_camera(points)
+        z = np.maximum(cam[:, 2], 1e-6)
+        u = self.focal * cam[:, 0] / z + self.width / 2.0
+        v = self.focal * cam[:, 1] / z + self.height / 2.0
+        return np.stack([u, v], axis=1)
+
+    def depth(self, point: Vec3) -> float:
+        """Camera depth (metres along the optical axis) of one world point."""
+        return float(self.to_camera(np.asarray([point]))[0, 2])
+
+    def plane_homography(self, origin: Vec3, axis_u: Vec3, axis_v: Vec3, ppm: float) -> Points:
+        """Homography from a texture of ``ppm`` pixels per metre to the image.
+
+        Texture pixel (i, j) sits at world ``origin + axis_u*i/ppm + axis_v*j/ppm``.
+        """
+        cols = np.stack(
+            [
+                np.asarray(axis_u, dtype=np.float64) / ppm,
+                np.asarray(axis_v, dtype=np.float64) / ppm,
+                np.asarray(origin, dtype=np.float64) - self.pos,
+            ],
+            axis=1,
+        )
+        result: Points = self.k_matrix @ self.rot @ cols
+        return result / result[2, 2]
+
+    def project_polygon(self, points: Points) -> Points | None:
+        """Project a planar world polygon, clipped to ``z > NEAR_Z``; None if gone."""
+        cam = self.to_camera(points)
+        kept: list[npt.NDArray[np.float64]] = []
+        count = len(cam)
+        for index in range(count):
+            cur, nxt = cam[index], cam[(index + 1) % count]
+            if cur[2] > NEAR_Z:
+                kept.append(cur)
+            if (cur[2] > NEAR_Z) != (nxt[2] > NEAR_Z):
+                t = (NEAR_Z - cur[2]) / (nxt[2] - cur[2])
+                kept.append(cur + t * (nxt - cur))
+        if len(kept) < 3:
+            return None
+        clipped = np.stack(kept)
+        u = self.focal * clipped[:, 0] / clipped[:, 2] + self.width / 2.0
+        v = self.focal * clipped[:, 1] / clipped[:, 2] + self.height / 2.0
+        return np.stack([u, v], axis=1)
+
+    def ground_rays(self) -> tuple[FloatMap, FloatMap, FloatMap]:
+        """Per-pixel ground hit: world X, world Z and camera depth (inf above horizon)."""
+        us, vs = np.meshgrid(
+            np.arange(self.width, dtype=np.float32), np.arange(self.height, dtype=np.float32)
+        )
+        dx = (us - self.width / 2.0) / self.focal
+        dy = (vs - self.height / 2.0) / self.focal
+        rot = self.rot.astype(np.float32)
+        ray = [dx * rot[0, k] + dy * rot[1, k] + rot[2, k] for k in range(3)]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(ray[1] < -1e-5, -float(self.pos[1]) / ray[1], np.inf).astype(np.float32)
+        world_x = (float(self.pos[0]) + t * ray[0]).astype(np.float32)
+        world_z = (float(self.pos[2]) + t * ray[2]).astype(np.float32)
+        return world_x, world_z, t
+
+    def horizon_row(self) -> float:
+        """Image row of the horizon (may lie outside the image)."""
+        fwd = self.rot[2]
+        horizontal = np.array([fwd[0], 0.0, fwd[2]])
+        far = self.pos + 1e6 * horizontal / np.linalg.norm(horizontal)
+        return float(self.project(far[None, :])[0, 1])
+
+
+@dataclass
+class Canvas:
+    """Albedo, emission and depth buffers of one scene, painted back to front.
+
+    ``albedo`` is lit later by the condition's light; ``emission`` (lamps,
+    lit reflectors) is added after lighting; ``depth`` (metres, inf for sky)
+    drives fog and headlight fall-off.
+    """
+
+    width: int
+    height: int
+    albedo: FloatImage = field(init=False)
+    emission: FloatImage = field(init=False)
+    depth: FloatMap = field(init=False)
+    shade: FloatMap = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.albedo = np.zeros((self.height, self.width, 3), np.float32)
+        self.emission = np.zeros((self.height, self.width, 3), np.float32)
+        self.depth = np.full((self.height, self.width), np.inf, np.float32)
+        self.shade = np.ones((self.height, self.width), np.float32)
+
+    def paint(self, mask: FloatMap, colour: FloatImage | BGR, depth: float | FloatMap,
+              shade: float = 1.0) -> None:
+        """Alpha-blend ``colour`` where ``mask`` (0..1) is set; write its depth."""
+        alpha = mask[..., None]
+        col = np.asarray(colour, dtype=np.float32)
+        self.albedo = (self.albedo * (1.0 - alpha) + col * alpha).astype(np.float32)
+        solid = mask > 0.5
+        self.depth[solid] = depth if np.isscalar(depth) else np.asarray(depth)[solid]
+        self.shade[solid] = shade
+
+    def paint_polygon(self, poly: Points | None, colour: BGR, depth: float,
+                      shade: float = 1.0) -> None:
+        """Fill an image polygon (anti-aliased) with a flat colour."""
+        if poly is None:
+            return
+        mask = np.zeros((self.height, self.width), np.uint8)
+        pts = np.round(poly * 4.0).astype(np.int32).reshape(-1, 1, 2)
+        cv2.fillPoly(mask, [pts], 255, lineType=cv2.LINE_AA, shift=2)
+        self.paint(mask.astype(np.float32) / 255.0, colour, depth, shade)
+
+    def paste(self, texture: FloatImage, alpha: FloatMap, homography: Points,
+              depth: float | FloatMap, shade: float = 1.0) -> FloatMap:
+        """Warp a texture with alpha into the image; returns the warped alpha."""
+        size = (self.width, self.height)
+        warped = cv2.warpPerspective(texture, homography, size, flags=cv2.INTER_LINEAR)
+        mask = cv2.warpPerspective(alpha, homography, size, flags=cv2.INTER_LINEAR)
+        self.paint(mask, warped.astype(np.float32), depth, shade)
+        return mask.astype(np.float32)
