@@ -1,6 +1,8 @@
 """Contact sheet of 24 generator-B scenes, for people to look at.
 
-Usage: ``python bench/scenes_b_gallery.py OUT.png [FIRST_SEED]``. Each tile is
+Usage: ``python bench/scenes_b_gallery.py OUT.png [FIRST_SEED]`` (without
+arguments, as ``make bench`` runs it, it writes ``var/scenes_b_gallery.png``;
+``var/`` is git-ignored). Each tile is
 labelled with seed, condition and disc / negative kind; disc boxes are drawn
 in green. The PNG is not meant to be committed.
 """
@@ -32,7 +34,7 @@ def _tile(scene: SceneB, seed: int) -> npt.NDArray[np.uint8]:
         x, y, w, h = scene.bbox
         pad = max(3, w // 3)
         cv2.rectangle(img, (x - pad, y - pad), (x + w + pad, y + h + pad), (0, 255, 0), 2)
-    tile = cv2.resize(img, TILE, interpolation=cv2.INTER_AREA)
+    tile = np.asarray(cv2.resize(img, TILE, interpolation=cv2.INTER_AREA), dtype=np.uint8)
     what = "DISC" if scene.disc else f"no disc: {scene.negative_kind}"
     label = f"{seed} {scene.condition} {what} {scene.image.shape[1]}x{scene.image.shape[0]}"
     cv2.rectangle(tile, (0, 0), (TILE[0], 18), (0, 0, 0), -1)
@@ -42,10 +44,8 @@ def _tile(scene: SceneB, seed: int) -> npt.NDArray[np.uint8]:
 
 
 def main(argv: list[str]) -> int:
-    if len(argv) < 2:
-        print("usage: python bench/scenes_b_gallery.py OUT.png [FIRST_SEED]", file=sys.stderr)
-        return 2
-    out = Path(argv[1])
+    out = Path(argv[1]) if len(argv) > 1 else _HERE.parent / "var" / "scenes_b_gallery.png"
+    out.parent.mkdir(parents=True, exist_ok=True)
     first = int(argv[2]) if len(argv) > 2 else 0
     tiles = [_tile(render_scene(s), s) for s in range(first, first + COUNT)]
     rows = [np.hstack(tiles[i : i + COLUMNS]) for i in range(0, COUNT, COLUMNS)]

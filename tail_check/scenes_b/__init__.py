@@ -61,8 +61,11 @@ class SceneB:
 
 
 def _bbox(mask: npt.NDArray[np.float32]) -> tuple[int, int, int, int] | None:
-    """Box of the pixels at least half covered by the disc."""
-    ys, xs = np.nonzero(mask >= 0.5)
+    """Box of the pixels at least half covered by the disc (tiny discs: the peak)."""
+    peak = float(mask.max()) if mask.size else 0.0
+    if peak <= 0.0:
+        return None
+    ys, xs = np.nonzero(mask >= min(0.5, peak * 0.5))
     if xs.size == 0:
         return None
     x0, y0 = int(xs.min()), int(ys.min())

@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from ._config import BGR, FloatImage, FloatMap
+from ._config import BGR, FloatImage, FloatMap, f32
 
 Vec3 = tuple[float, float, float]
 Points = npt.NDArray[np.float64]
@@ -72,7 +72,8 @@ class Camera:
         z = np.maximum(cam[:, 2], 1e-6)
         u = self.focal * cam[:, 0] / z + self.width / 2.0
         v = self.focal * cam[:, 1] / z + self.height / 2.0
-        return np.stack([u, v], axis=1)
+        result: Points = np.stack([u, v], axis=1)
+        return result
 
     def depth(self, point: Vec3) -> float:
         """Camera depth (metres along the optical axis) of one world point."""
@@ -92,7 +93,8 @@ class Camera:
             axis=1,
         )
         result: Points = self.k_matrix @ self.rot @ cols
-        return result / result[2, 2]
+        normalised: Points = result / result[2, 2]
+        return normalised
 
     def project_polygon(self, points: Points) -> Points | None:
         """Project a planar world polygon, clipped to ``z > NEAR_Z``; None if gone."""
@@ -160,23 +162,47 @@ class Canvas:
 
     def paint(self, mask: FloatMap, colour: FloatImage | BGR, depth: float | FloatMap,
               shade: float = 1.0) -> None:
-        """Alpha-blend ``colour`` where ``mask`` (0..1) is set; write its depth."""
-        alpha = mask[..., None]
+        """Alpha-blend ``colour`` where ``mask`` (0..1) is set; write its depth.
+
+        ``colour`` and ``depth`` are either per-pixel (full image) or constant.
+        Only the mask's bounding box is touched, which keeps small items cheap.
+        """
+        x, y, w, h = cv2.boundingRect((mask > 1e-3).astype(np.uint8))
+        if w == 0 or h == 0:
+            return
+        box = (slice(y, y + h), slice(x, x + w))
         col = np.asarray(colour, dtype=np.float32)
-        self.albedo = (self.albedo * (1.0 - alpha) + col * alpha).astype(np.float32)
-        solid = mask > 0.5
-        self.depth[solid] = depth if np.isscalar(depth) else np.asarray(depth)[solid]
-        self.shade[solid] = shade
+        dep: float | FloatMap = (
+            float(depth) if isinstance(depth, float | int) else np.asarray(depth, np.float32)[box]
+        )
+        self._blend(box, mask[box], col[box] if col.ndim == 3 else col, dep, shade)
+
+    def _blend(self, box: tuple[slice, slice], alpha: FloatMap, col: npt.NDArray[np.float32],
+               depth: float | FloatMap, shade: float) -> None:
+        """Blend inside ``box``; ``alpha`` (and per-pixel ``col``/``depth``) are box-sized."""
+        region = self.albedo[box]
+        region[:] = region * (1.0 - alpha[..., None]) + col * alpha[..., None]
+        solid = alpha > 0.5
+        self.depth[box][solid] = depth if isinstance(depth, float) else depth[solid]
+        self.shade[box][solid] = shade
 
     def paint_polygon(self, poly: Points | None, colour: BGR, depth: float,
                       shade: float = 1.0) -> None:
         """Fill an image polygon (anti-aliased) with a flat colour."""
         if poly is None:
             return
-        mask = np.zeros((self.height, self.width), np.uint8)
-        pts = np.round(poly * 4.0).astype(np.int32).reshape(-1, 1, 2)
+        x0 = max(0, int(np.floor(poly[:, 0].min())) - 1)
+        y0 = max(0, int(np.floor(poly[:, 1].min())) - 1)
+        x1 = min(self.width, int(np.ceil(poly[:, 0].max())) + 2)
+        y1 = min(self.height, int(np.ceil(poly[:, 1].max())) + 2)
+        if x0 >= x1 or y0 >= y1:
+            return
+        mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
+        pts = np.round((poly - [x0, y0]) * 4.0).astype(np.int32).reshape(-1, 1, 2)
         cv2.fillPoly(mask, [pts], 255, lineType=cv2.LINE_AA, shift=2)
-        self.paint(mask.astype(np.float32) / 255.0, colour, depth, shade)
+        box = (slice(y0, y1), slice(x0, x1))
+        alpha = mask.astype(np.float32) / 255.0
+        self._blend(box, alpha, np.asarray(colour, np.float32), depth, shade)
 
     def paste(self, texture: FloatImage, alpha: FloatMap, homography: Points,
               depth: float | FloatMap, shade: float = 1.0) -> FloatMap:
@@ -184,5 +210,5 @@ class Canvas:
         size = (self.width, self.height)
         warped = cv2.warpPerspective(texture, homography, size, flags=cv2.INTER_LINEAR)
         mask = cv2.warpPerspective(alpha, homography, size, flags=cv2.INTER_LINEAR)
-        self.paint(mask, warped.astype(np.float32), depth, shade)
-        return mask.astype(np.float32)
+        self.paint(f32(mask), f32(warped), depth, shade)
+        return f32(mask)

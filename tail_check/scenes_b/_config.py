@@ -116,9 +116,15 @@ class SceneRanges:
 RANGES = SceneRanges()
 
 
+def f32(values: object) -> npt.NDArray[np.float32]:
+    """``values`` as a float32 array (typed, for OpenCV and numpy results)."""
+    return np.asarray(values, dtype=np.float32)
+
+
 def uniform(rng: Rng, bounds: tuple[float, float]) -> float:
-    """One draw from ``[low, high)`` as a Python float."""
-    return float(rng.uniform(bounds[0], bounds[1]))
+    """One draw from ``[low, high)`` as a Python float (``low`` if the range is empty)."""
+    low, high = bounds
+    return float(rng.uniform(low, max(low, high)))
 
 
 def hsv_to_bgr(hue: float, sat: float, val: float) -> BGR:

@@ -90,12 +90,14 @@ class Face:
         # putText draws on 8-bit images only: draw a coverage patch, then blend it in
         cv2.putText(patch, label, (th, tht + th), font, scale, 255, th, cv2.LINE_AA)
         h, w = self.alpha.shape
-        xa, ya, xb, yb = max(0, x0), max(0, y0), min(w, x0 + patch.shape[1]), min(h, y0 + patch.shape[0])
+        xa, ya = max(0, x0), max(0, y0)
+        xb, yb = min(w, x0 + patch.shape[1]), min(h, y0 + patch.shape[0])
         if xa >= xb or ya >= yb:
             return
         cover = patch[ya - y0 : yb - y0, xa - x0 : xb - x0].astype(np.float32) / 255.0
         region = self.texture[ya:yb, xa:xb]
-        region[:] = region * (1.0 - cover[..., None]) + np.asarray(colour, np.float32) * cover[..., None]
+        paint = np.asarray(colour, np.float32)
+        region[:] = region * (1.0 - cover[..., None]) + paint * cover[..., None]
         self.alpha[ya:yb, xa:xb] = np.maximum(self.alpha[ya:yb, xa:xb], cover)
 
     def text_width(self, label: str, height_m: float,
@@ -109,7 +111,8 @@ class Face:
     def grime(self, rng: np.random.Generator, strength: float, scale_m: float) -> None:
         """Multiplicative dirt / weathering noise over the painted area."""
         h, w = self.alpha.shape
-        cells = (max(2, int(h / (scale_m * self.ppm)) + 1), max(2, int(w / (scale_m * self.ppm)) + 1))
+        step = scale_m * self.ppm
+        cells = (max(2, int(h / step) + 1), max(2, int(w / step) + 1))
         small = rng.standard_normal(cells).astype(np.float32)
         big = cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
         fine = rng.standard_normal((h, w)).astype(np.float32) * 0.25

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from ._camera import Camera, Canvas
-from ._config import BGR, FloatImage, FloatMap, Rng, uniform
+from ._config import BGR, FloatImage, FloatMap, Rng, f32, uniform
 
 
 @dataclass(frozen=True)
@@ -38,7 +38,7 @@ def _noise(rng: Rng, height: int, width: int, scale: float) -> FloatMap:
         (max(2, int(height / scale)) + 1, max(2, int(width / scale)) + 1)
     ).astype(np.float32)
     big = cv2.resize(small, (width, height), interpolation=cv2.INTER_CUBIC)
-    return np.clip(big / 2.0, -1.0, 1.0).astype(np.float32)
+    return f32(np.clip(big / 2.0, -1.0, 1.0))
 
 
 def paint_sky(canvas: Canvas, camera: Camera, rng: Rng, top: BGR, bottom: BGR) -> None:
@@ -56,17 +56,17 @@ def paint_sky(canvas: Canvas, camera: Camera, rng: Rng, top: BGR, bottom: BGR) -
 
 def _coverage(distance: FloatMap, half_width: float, footprint: FloatMap) -> FloatMap:
     """Anti-aliased coverage of a band of ``half_width`` metres."""
-    return np.clip(0.5 + (half_width - distance) / footprint, 0.0, 1.0).astype(np.float32)
+    return f32(np.clip(0.5 + (half_width - distance) / footprint, 0.0, 1.0))
 
 
 def _sleeper_cover(world_z: FloatMap, footprint: FloatMap) -> FloatMap:
     """Sleeper coverage along Z, averaged out where the footprint exceeds the spacing."""
-    phase = np.mod(world_z, TRACK.sleeper_spacing) - TRACK.sleeper_width / 2.0
-    phase = np.minimum(np.abs(phase), TRACK.sleeper_spacing - np.abs(phase))
+    phase = f32(np.mod(world_z, TRACK.sleeper_spacing) - TRACK.sleeper_width / 2.0)
+    phase = f32(np.minimum(np.abs(phase), TRACK.sleeper_spacing - np.abs(phase)))
     sharp = _coverage(phase, TRACK.sleeper_width / 2.0, footprint)
     mean = TRACK.sleeper_width / TRACK.sleeper_spacing
     fade = np.clip(footprint / TRACK.sleeper_spacing, 0.0, 1.0)
-    return (sharp * (1.0 - fade) + mean * fade).astype(np.float32)
+    return f32(sharp * (1.0 - fade) + mean * fade)
 
 
 def _track_layer(
@@ -85,7 +85,7 @@ def _track_layer(
     rail_col = np.asarray((55.0, 62.0, 70.0), np.float32)
     albedo = albedo * (1.0 - rail[..., None]) + rail_col * rail[..., None]
     albedo = albedo + (shine - 60.0) * head[..., None] * 0.8
-    return albedo.astype(np.float32)
+    return f32(albedo)
 
 
 def paint_ground(canvas: Canvas, camera: Camera, rng: Rng, verge: BGR, snowy: bool) -> None:

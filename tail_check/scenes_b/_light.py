@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from ._camera import Canvas
-from ._config import BGR, FloatImage, Rng, hsv_to_bgr, uniform
+from ._config import BGR, FloatImage, Rng, f32, hsv_to_bgr, uniform
 
 
 @dataclass(frozen=True)
@@ -96,15 +96,17 @@ def light_scene(canvas: Canvas, light: Light, rng: Rng) -> FloatImage:
         reach = uniform(rng, (10.0, 30.0))
         fall = light.headlight / (1.0 + (depth / reach) ** 2)
         lit = lit + canvas.albedo * (cone * fall)[..., None] * np.float32(0.9)
-    lit = lit + canvas.emission
-    glow = cv2.GaussianBlur(canvas.emission, (0, 0), max(1.0, h * uniform(rng, (0.006, 0.02))))
-    lit = lit + glow * np.float32(uniform(rng, (0.3, 1.2)))
+    glare, halo = uniform(rng, (0.006, 0.02)), uniform(rng, (0.3, 1.2))
+    emits = bool(canvas.emission.max() > 0)
+    if emits:  # lamps and lit reflectors: core plus glare (skipped when nothing shines)
+        lit = lit + canvas.emission
+        lit = lit + cv2.GaussianBlur(canvas.emission, (0, 0), max(1.0, h * glare)) * halo
     trans = np.exp(-np.minimum(canvas.depth, 1e5) / light.visibility)[..., None]
     fog = np.asarray(light.fog, np.float32) * (light.ambient if light.headlight > 0 else 1.0)
-    if light.visibility < 200.0:  # thick fog scatters lamp light into wide halos
+    if emits and light.visibility < 200.0:  # thick fog scatters lamp light into wide halos
         lit = lit + cv2.GaussianBlur(canvas.emission, (0, 0), h * 0.04) * np.float32(0.8)
-    lit = lit * trans + fog * (1.0 - trans)
-    return lit.astype(np.float32)
+    lit = f32(lit * trans + fog * (1.0 - trans))
+    return f32(lit)
 
 
 def precipitation(image: FloatImage, light: Light, rng: Rng) -> FloatImage:
@@ -120,12 +122,11 @@ def precipitation(image: FloatImage, light: Light, rng: Rng) -> FloatImage:
             length = float(rng.uniform(0.02, 0.06)) * h
             end = (int(x + slant * length), int(y + length))
             cv2.line(layer, (int(x), int(y)), end, float(rng.uniform(0.1, 0.35)), 1, cv2.LINE_AA)
-        layer = cv2.GaussianBlur(layer, (3, 3), 0)
-        return (image * (1.0 - layer[..., None] * 0.5) + 200.0 * layer[..., None]).astype(
-            np.float32)
+        layer = f32(cv2.GaussianBlur(layer, (3, 3), 0))
+        return f32(image * (1.0 - layer[..., None] * 0.5) + 200.0 * layer[..., None])
     for _ in range(int(w * h / 1500 * uniform(rng, (0.2, 1.0)))):
         r = float(rng.pareto(2.5) + 1.0) * h * 0.0012
         centre = (int(rng.uniform(0, w)), int(rng.uniform(0, h)))
         cv2.circle(layer, centre, max(1, int(r)), float(rng.uniform(0.4, 1.0)), -1, cv2.LINE_AA)
-    layer = cv2.GaussianBlur(layer, (0, 0), 1.0)
-    return (image * (1.0 - layer[..., None]) + 235.0 * layer[..., None]).astype(np.float32)
+    layer = f32(cv2.GaussianBlur(layer, (0, 0), 1.0))
+    return f32(image * (1.0 - layer[..., None]) + 235.0 * layer[..., None])

@@ -84,6 +84,7 @@ def hand_wheel(face: Face, car: CarSpec, rng: Rng, side: float) -> None:
     y = uniform(rng, (BEAM_TOP + r + 0.1, min(car.top, BEAM_TOP + 2.2) - r))
     colour = red_paint(rng)
     rim = r * uniform(rng, (0.12, 0.2))
+    face.line((u, BEAM_TOP), (u, y), (45.0, 45.0, 48.0), 0.05)  # brake staff
     face.ellipse(u, y, r, r, colour, thickness_m=rim)
     spokes = int(rng.integers(3, 7))
     phase = uniform(rng, (0.0, np.pi))

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 
 from ._camera import Camera, Canvas
-from ._config import BGR, Rng, hsv_to_bgr, uniform
+from ._config import BGR, Rng, f32, hsv_to_bgr, uniform
 
 BACKGROUNDS: tuple[str, ...] = ("trees", "buildings", "station", "open")
 
@@ -31,10 +31,10 @@ def tree_line(canvas: Canvas, camera: Camera, rng: Rng, green: BGR) -> None:
     heights = np.interp(np.arange(w), np.arange(len(heights)) * 4, heights)
     top = base - np.clip(heights, 3.0, 30.0) * px_per_m
     rows = np.arange(canvas.height, dtype=np.float32)[:, None]
-    mask = ((rows >= top[None, :]) & (rows <= base + 2)).astype(np.float32)
-    mask = cv2.GaussianBlur(mask, (3, 3), 0)
+    inside = ((rows >= top[None, :]) & (rows <= base + 2)).astype(np.float32)
+    mask = np.asarray(cv2.GaussianBlur(inside, (3, 3), 0), np.float32)
     leaves = rng.standard_normal((canvas.height // 6 + 1, w // 6 + 1)).astype(np.float32)
-    leaves = cv2.resize(leaves, (w, canvas.height), interpolation=cv2.INTER_LINEAR)
+    leaves = f32(cv2.resize(leaves, (w, canvas.height), interpolation=cv2.INTER_LINEAR))
     colour = np.asarray(green, np.float32) * (1.0 + 0.3 * leaves[..., None])
     canvas.paint(mask, colour.astype(np.float32), depth)
 
@@ -71,8 +71,8 @@ def station(canvas: Canvas, camera: Camera, rng: Rng, side: float, z_far: float)
     canvas.paint_polygon(camera.project_polygon(top), stone, 30.0)
     front = np.asarray([(edge, 0.0, 2.0), (edge, y, 2.0), (edge, y, z_far), (edge, 0.0, z_far)])
     canvas.paint_polygon(camera.project_polygon(front), (stone[0] * 0.6,) * 3, 30.0)
-    line = np.asarray([(edge + side * 0.5, y + 0.001, 2.0), (edge + side * 0.6, y + 0.001, 2.0),
-                       (edge + side * 0.6, y + 0.001, z_far), (edge + side * 0.5, y + 0.001, z_far)])
+    a, b = edge + side * 0.5, edge + side * 0.6  # the yellow safety line
+    line = np.asarray([(a, y, 2.0), (b, y, 2.0), (b, y, z_far), (a, y, z_far)])
     canvas.paint_polygon(camera.project_polygon(line), (40.0, 200.0, 230.0), 30.0)
     for z in np.arange(uniform(rng, (8.0, 20.0)), z_far, uniform(rng, (8.0, 14.0))):
         x = side * 5.0

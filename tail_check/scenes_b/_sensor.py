@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from ._config import RANGES, FloatImage, FloatMap, Rng, uniform
+from ._config import RANGES, FloatImage, FloatMap, Rng, f32, uniform
 
 Uint8Image = npt.NDArray[np.uint8]
 
@@ -25,10 +25,10 @@ def tilt(image: FloatImage, disc_mask: FloatMap | None, rng: Rng
     matrix = np.hstack([lin, (centre - lin @ centre)[:, None]])
     out = cv2.warpAffine(image, matrix, (w, h), flags=cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_REFLECT)
-    mask = None
+    mask: FloatMap | None = None
     if disc_mask is not None:
-        mask = cv2.warpAffine(disc_mask, matrix, (w, h), flags=cv2.INTER_LINEAR)
-    return out.astype(np.float32), None if mask is None else mask.astype(np.float32)
+        mask = f32(cv2.warpAffine(disc_mask, matrix, (w, h), flags=cv2.INTER_LINEAR))
+    return f32(out), None if mask is None else f32(mask)
 
 
 def optics(image: FloatImage, rng: Rng, *, night: bool) -> FloatImage:
@@ -41,17 +41,17 @@ def optics(image: FloatImage, rng: Rng, *, night: bool) -> FloatImage:
         kernel[length // 2, :] = 1.0 / length
         rot = cv2.getRotationMatrix2D((length / 2 - 0.5, length / 2 - 0.5),
                                       uniform(rng, (-20.0, 20.0)), 1.0)
-        kernel = cv2.warpAffine(kernel, rot, (length, length))
+        kernel = f32(cv2.warpAffine(kernel, rot, (length, length)))
         kernel /= max(float(kernel.sum()), 1e-6)
-        out = cv2.filter2D(out, -1, kernel)
+        out = f32(cv2.filter2D(out, -1, kernel))
     sigma = uniform(rng, (0.0, 1.3)) * h / 1080.0
     if sigma > 0.3:
-        out = cv2.GaussianBlur(out, (0, 0), sigma)
+        out = f32(cv2.GaussianBlur(out, (0, 0), sigma))
     ys, xs = np.mgrid[0:h, 0:w].astype(np.float32)
     r2 = ((xs - w / 2) / (w / 2)) ** 2 + ((ys - h / 2) / (h / 2)) ** 2
     strength = uniform(rng, (0.0, 0.45 if night else 0.3))
-    out = out * (1.0 - strength * r2 / 2.0)[..., None]
-    return out.astype(np.float32)
+    out = f32(out * (1.0 - strength * r2 / 2.0)[..., None])
+    return f32(out)
 
 
 def sensor(image: FloatImage, rng: Rng, *, night: bool) -> Uint8Image:
@@ -68,7 +68,7 @@ def sensor(image: FloatImage, rng: Rng, *, night: bool) -> Uint8Image:
                                                                          max(1e-3, 1 - knee)))
     gamma = uniform(rng, (0.9, 1.1))
     out = np.clip(np.power(np.clip(toned, 0.0, 1.0), gamma) * 255.0, 0, 255)
-    return np.round(out).astype(np.uint8)
+    return np.asarray(np.round(out), dtype=np.uint8)
 
 
 def jpeg_round_trip(image: Uint8Image, rng: Rng) -> Uint8Image:
