@@ -182,12 +182,13 @@ class Canvas:
         """Blend inside ``box``; ``alpha`` (and per-pixel ``col``/``depth``) are box-sized."""
         region = self.albedo[box]
         region[:] = region * (1.0 - alpha[..., None]) + col * alpha[..., None]
+        self.emission[box] *= (1.0 - alpha)[..., None]  # what is painted over a lamp hides it
         solid = alpha > 0.5
         self.depth[box][solid] = depth if isinstance(depth, float) else depth[solid]
         self.shade[box][solid] = shade
 
     def paint_polygon(self, poly: Points | None, colour: BGR, depth: float,
-                      shade: float = 1.0) -> None:
+                      shade: float = 1.0, alpha: float = 1.0) -> None:
         """Fill an image polygon (anti-aliased) with a flat colour."""
         if poly is None:
             return
@@ -201,8 +202,8 @@ class Canvas:
         pts = np.round((poly - [x0, y0]) * 4.0).astype(np.int32).reshape(-1, 1, 2)
         cv2.fillPoly(mask, [pts], 255, lineType=cv2.LINE_AA, shift=2)
         box = (slice(y0, y1), slice(x0, x1))
-        alpha = mask.astype(np.float32) / 255.0
-        self._blend(box, alpha, np.asarray(colour, np.float32), depth, shade)
+        cover = mask.astype(np.float32) * np.float32(alpha / 255.0)
+        self._blend(box, cover, np.asarray(colour, np.float32), depth, shade)
 
     def paste(self, texture: FloatImage, alpha: FloatMap, homography: Points,
               depth: float | FloatMap, shade: float = 1.0) -> FloatMap:

@@ -36,7 +36,7 @@ class DiscLook:
 def choose_look(rng: Rng, *, snowy: bool, night: bool) -> DiscLook:
     """Random disc look: hue, fading and dirt, rim, reflector, snow clumps."""
     faded = rng.random() < 0.3
-    hue = uniform(rng, (172.0, 186.0))
+    hue = uniform(rng, (173.0, 184.0))
     sat = uniform(rng, (110.0, 175.0)) if faded else uniform(rng, (175.0, 250.0))
     val = uniform(rng, (120.0, 235.0))
     field = hsv_to_bgr(hue, sat, val)

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from . import _negatives as neg
 from ._camera import Camera, Canvas
-from ._car import BEAM_TOP, draw_end, draw_side
-from ._config import FloatMap, Rng, hsv_to_bgr, uniform
+from ._car import BEAM_TOP, CarSpec, choose_car, draw_end, draw_side
+from ._config import FloatMap, Rng, f32, hsv_to_bgr, uniform
 from ._disc import TEXTURE_PX, choose_look, render_disc
 from ._face import Face
 from ._layout import Layout
@@ -76,48 +78,68 @@ def _paint_markings(lay: Layout, end: Face, side: Face, tail_u: float, rng: Rng)
         neg.red_stripe(end, car, rng, y=max(BEAM_TOP + 0.02, y))
 
 
-def _paste_car(canvas: Canvas, lay: Layout, light: Light, rng: Rng) -> None:
-    """Side wall, then end wall (nearer), as warped textures."""
-    cam, car = lay.camera, lay.car
-    end, side = _faces(lay)
+def _paste_side(canvas: Canvas, cam: Camera, car: CarSpec, face: Face, z_start: float,
+                shade: float) -> None:
+    """Warp one car's side wall (facing the camera) into the image, with its depth."""
+    import cv2
+
     sgn = float(np.sign(cam.pos[0])) or 1.0
-    tail_u = 0.0 if sgn > 0 else car.length
+    if sgn > 0:
+        hom = cam.plane_homography((car.width / 2, face.top, z_start), (0, 0, 1), (0, -1, 0),
+                                   face.ppm)
+    else:
+        hom = cam.plane_homography((-car.width / 2, face.top, z_start + car.length),
+                                   (0, 0, -1), (0, -1, 0), face.ppm)
+    h, w = face.alpha.shape
+    us = (np.arange(w) + 0.5) / face.ppm
+    zs = z_start + (us if sgn > 0 else car.length - us)
+    pts = np.stack([np.full(w, sgn * car.width / 2), np.full(w, 2.0), zs], axis=1)
+    depth_tex = np.repeat(f32(cam.to_camera(pts)[:, 2])[None, :], h, axis=0)
+    depth = f32(cv2.warpPerspective(depth_tex, hom, (canvas.width, canvas.height),
+                                    flags=cv2.INTER_NEAREST))
+    canvas.paste(face.texture, face.alpha, hom, depth, shade=shade)
+
+
+def _train_ahead(canvas: Canvas, lay: Layout, shade: float, rng: Rng) -> float:
+    """The cars coupled ahead of the last one, far to near; returns the train's far end Z."""
+    cars = []
+    z = lay.end_z + lay.car.length + uniform(rng, (0.9, 1.3))
+    for _ in range(int(rng.integers(0, 4))):
+        same = rng.random() < 0.6  # block trains: the same car type over and over
+        car = replace(lay.car, length=uniform(rng, (12.0, 19.0))) if same else choose_car(
+            rng, red_body=False)
+        cars.append((car, z))
+        z += car.length + uniform(rng, (0.9, 1.3))
+    for car, z0 in reversed(cars):
+        top = car.top + (2.7 if car.container is not None else 0.1)
+        ppm = min(lay.camera.focal / z0 * 1.25, MAX_TEXTURE_PX / car.length)
+        face = Face(car.length, top, ppm, 0.0, top)
+        draw_side(face, car, rng)
+        _paste_side(canvas, lay.camera, car, face, z0, shade)
+    return z
+
+
+def _paste_car(canvas: Canvas, lay: Layout, light: Light, rng: Rng) -> None:
+    """Shadow, the train ahead, the last car's side wall, then its end wall (nearer)."""
+    cam, car = lay.camera, lay.car
+    shade = float(np.clip(light.side_shade, 0.5, 1.4))
+    far = _train_ahead(canvas, lay, shade, rng)
+    half = car.width / 2 + 0.25
+    shadow = np.asarray([(-half, 0.0, lay.end_z - 0.3), (half, 0.0, lay.end_z - 0.3),
+                         (half, 0.0, far), (-half, 0.0, far)])
+    canvas.paint_polygon(cam.project_polygon(shadow), (10.0, 10.0, 12.0),
+                         cam.depth((0.0, 0.0, lay.end_z)), alpha=uniform(rng, (0.25, 0.55)))
+    end, side = _faces(lay)
+    tail_u = 0.0 if cam.pos[0] >= 0 else car.length
     draw_side(side, car, rng)
     draw_end(end, car, rng)
     _paint_markings(lay, end, side, tail_u, rng)
     x, y, _ = lay.disc_pos
     end.line((x, BEAM_TOP - 0.05), (x, y), (40.0, 40.0, 42.0), 0.05)  # disc bracket
     end.rect(x - 0.07, BEAM_TOP - 0.02, x + 0.07, BEAM_TOP + 0.06, (45.0, 45.0, 48.0))
-    z0 = lay.end_z
-    if sgn > 0:
-        hom = cam.plane_homography((car.width / 2, side.top, z0), (0, 0, 1), (0, -1, 0), side.ppm)
-    else:
-        hom = cam.plane_homography((-car.width / 2, side.top, z0 + car.length), (0, 0, -1),
-                                   (0, -1, 0), side.ppm)
-    canvas.paste(side.texture, side.alpha, hom, _side_depth(cam, lay, side, sgn),
-                 shade=float(np.clip(light.side_shade, 0.5, 1.4)))
-    hom = cam.plane_homography((end.u0, end.top, z0), (1, 0, 0), (0, -1, 0), end.ppm)
-    canvas.paste(end.texture, end.alpha, hom, cam.depth((0.0, 2.0, z0)))
-
-
-def _side_depth(cam: Camera, lay: Layout, side: Face, sgn: float) -> FloatMap:
-    """Per-pixel depth of the side wall, warped from a column-wise depth texture."""
-    import cv2
-
-    h, w = side.alpha.shape
-    us = (np.arange(w) + 0.5) / side.ppm
-    zs = lay.end_z + (us if sgn > 0 else lay.car.length - us)
-    pts = np.stack([np.full(w, sgn * lay.car.width / 2), np.full(w, 2.0), zs], axis=1)
-    depth_row = cam.to_camera(pts)[:, 2].astype(np.float32)
-    tex = np.repeat(depth_row[None, :], h, axis=0)
-    if sgn > 0:
-        hom = cam.plane_homography((lay.car.width / 2, side.top, lay.end_z), (0, 0, 1),
-                                   (0, -1, 0), side.ppm)
-    else:
-        hom = cam.plane_homography((-lay.car.width / 2, side.top, lay.end_z + lay.car.length),
-                                   (0, 0, -1), (0, -1, 0), side.ppm)
-    out = cv2.warpPerspective(tex, hom, (lay.width, lay.height), flags=cv2.INTER_NEAREST)
-    return np.asarray(out, np.float32)
+    _paste_side(canvas, cam, car, side, lay.end_z, shade)
+    hom = cam.plane_homography((end.u0, end.top, lay.end_z), (1, 0, 0), (0, -1, 0), end.ppm)
+    canvas.paste(end.texture, end.alpha, hom, cam.depth((0.0, 2.0, lay.end_z)))
 
 
 def _disc_homography(lay: Layout) -> np.ndarray:

@@ -47,8 +47,8 @@ def buildings(canvas: Canvas, camera: Camera, rng: Rng) -> None:
         ppm = camera.focal / depth
         bw, bh = uniform(rng, (10.0, 40.0)) * ppm, uniform(rng, (6.0, 30.0)) * ppm
         x0 = uniform(rng, (-0.2, 1.0)) * canvas.width
-        wall = hsv_to_bgr(uniform(rng, (0.0, 180.0)), uniform(rng, (0.0, 60.0)),
-                          uniform(rng, (90.0, 210.0)))
+        wall = hsv_to_bgr(uniform(rng, (5.0, 30.0)), uniform(rng, (0.0, 70.0)),
+                          uniform(rng, (90.0, 210.0)))  # plaster, cream, brick, concrete
         poly = np.array([(x0, base), (x0 + bw, base), (x0 + bw, base - bh), (x0, base - bh)])
         canvas.paint_polygon(poly, wall, depth)
         glass = (max(0.0, wall[0] * 0.5), wall[1] * 0.5, wall[2] * 0.45)
