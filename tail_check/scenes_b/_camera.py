@@ -126,8 +126,9 @@ class Camera:
         ray = [dx * rot[0, k] + dy * rot[1, k] + rot[2, k] for k in range(3)]
         with np.errstate(divide="ignore", invalid="ignore"):
             t = np.where(ray[1] < -1e-5, -float(self.pos[1]) / ray[1], np.inf).astype(np.float32)
-        world_x = (float(self.pos[0]) + t * ray[0]).astype(np.float32)
-        world_z = (float(self.pos[2]) + t * ray[2]).astype(np.float32)
+            # sky pixels (t = inf) give inf or nan here; callers mask them with isfinite(t)
+            world_x = (float(self.pos[0]) + t * ray[0]).astype(np.float32)
+            world_z = (float(self.pos[2]) + t * ray[2]).astype(np.float32)
         return world_x, world_z, t
 
     def horizon_row(self) -> float:

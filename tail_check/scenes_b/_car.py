@@ -10,9 +10,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
-from ._config import BGR, CAR_PAINTS, CAR_SHAPES, Rng, hsv_to_bgr, uniform
+from ._config import BGR, CAR_PAINTS, CAR_SHAPES, RANGES, Rng, hsv_to_bgr, uniform
 from ._face import Face
 
 BEAM_BOTTOM = 0.85
@@ -78,6 +79,20 @@ def choose_car(rng: Rng, *, red_body: bool) -> CarSpec:
     )
 
 
+def rust(face: Face, rng: Rng, amount: float) -> None:
+    """Rust patches and streaks: noise above a threshold, blended towards rust brown."""
+    h, w = face.alpha.shape
+    cells = (max(2, int(h / (0.5 * face.ppm)) + 1), max(2, int(w / (0.5 * face.ppm)) + 1))
+    small = rng.standard_normal(cells).astype(np.float32)
+    big = cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
+    streaks = cv2.resize(rng.standard_normal((2, max(2, w // 6))).astype(np.float32), (w, h))
+    level = big + 0.3 * streaks
+    cover = np.clip((level - (1.6 - amount)) * 2.0, 0.0, 0.85)[..., None]
+    colour = np.asarray(hsv_to_bgr(uniform(rng, (8.0, 16.0)), uniform(rng, (150.0, 220.0)),
+                                   uniform(rng, (60.0, 120.0))), np.float32)
+    face.texture[:] = face.texture * (1.0 - cover) + colour * cover
+
+
 def _scaled(colour: BGR, factor: float) -> BGR:
     return (colour[0] * factor, colour[1] * factor, colour[2] * factor)
 
@@ -135,6 +150,8 @@ def draw_end(face: Face, car: CarSpec, rng: Rng) -> None:
             face.rect(s * 0.875 - 0.12, COUPLER_Y - 0.12, s * 0.875 + 0.12, COUPLER_Y + 0.12, dark)
             face.ellipse(s * 0.875, COUPLER_Y, 0.2, 0.2, (55.0, 58.0, 62.0))
     _end_body(face, car, rng)
+    if car.paint == "rusty" or rng.random() < RANGES.p_rust:
+        rust(face, rng, uniform(rng, (0.1, 0.8)))
     face.grime(rng, uniform(rng, (0.05, 0.3)), 0.4)
     face.shade_rows(BEAM_TOP + 1.0, 0.0, uniform(rng, (0.1, 0.45)))
 
@@ -174,5 +191,7 @@ def draw_side(face: Face, car: CarSpec, rng: Rng) -> None:
             for centre in (length * 0.35, length * 0.65):
                 face.poly([(centre - 1.6, BEAM_TOP), (centre + 1.6, BEAM_TOP),
                            (centre + 0.5, 0.6), (centre - 0.5, 0.6)], _scaled(col, 0.8))
+    if car.paint == "rusty" or rng.random() < RANGES.p_rust:
+        rust(face, rng, uniform(rng, (0.1, 0.8)))
     face.grime(rng, uniform(rng, (0.05, 0.3)), 0.6)
     face.shade_rows(BEAM_TOP + 1.2, 0.0, uniform(rng, (0.1, 0.4)))

@@ -78,6 +78,10 @@ class SceneRanges:
     jpeg_quality : JPEG quality of the final round trip (inclusive).
     rotation_deg, shear, zoom : final mild image warp (rotation, x-shear,
         zoom-in factor that hides the warp's borders).
+    disc_yaw_deg, disc_pitch_deg : turn of the disc on its bracket relative to
+        the end wall (the end wall itself is seen at up to ~41° off-axis).
+    pole_width, pole_offset : occluding pole width and its centre's offset
+        from the disc centre, in disc radii (so part of the disc stays visible).
     p_disc : probability of a disc when ``disc=None``.
     p_disc_right : probability the disc hangs on the right (instruction side).
     p_pole_occlusion : probability a near pole cuts across the disc.
@@ -87,6 +91,10 @@ class SceneRanges:
     p_motion_blur : probability of horizontal motion blur.
     noise_sigma : sensor noise standard deviation, 0..255 units.
     exposure_gain : global exposure error factor.
+    p_bad_exposure, bad_exposure_gain : probability and range of a gross
+        exposure error (auto-exposure fooled by sky, snow or headlights).
+    p_rust : probability of rust patches on a car not painted "rusty"
+        (rusty cars always get them).
     """
 
     disc_radius_frac: tuple[float, float] = (0.015, 0.08)
@@ -101,6 +109,10 @@ class SceneRanges:
     rotation_deg: tuple[float, float] = (-3.0, 3.0)
     shear: tuple[float, float] = (-0.04, 0.04)
     zoom: tuple[float, float] = (1.03, 1.10)
+    disc_yaw_deg: tuple[float, float] = (-15.0, 15.0)
+    disc_pitch_deg: tuple[float, float] = (-8.0, 8.0)
+    pole_width: tuple[float, float] = (0.3, 0.8)
+    pole_offset: tuple[float, float] = (0.2, 1.0)
     p_disc: float = 0.5
     p_disc_right: float = 0.85
     p_pole_occlusion: float = 0.15
@@ -111,6 +123,9 @@ class SceneRanges:
     p_motion_blur: float = 0.25
     noise_sigma: tuple[float, float] = (1.0, 6.0)
     exposure_gain: tuple[float, float] = (0.7, 1.35)
+    p_bad_exposure: float = 0.12
+    bad_exposure_gain: tuple[float, float] = (0.4, 2.0)
+    p_rust: float = 0.15
 
 
 RANGES = SceneRanges()

@@ -9,7 +9,7 @@ import numpy as np
 from . import _negatives as neg
 from ._camera import Camera, Canvas
 from ._car import BEAM_TOP, CarSpec, choose_car, draw_end, draw_side
-from ._config import FloatMap, Rng, f32, hsv_to_bgr, uniform
+from ._config import RANGES, FloatMap, Rng, f32, hsv_to_bgr, uniform
 from ._disc import TEXTURE_PX, choose_look, render_disc
 from ._face import Face
 from ._layout import Layout
@@ -175,8 +175,8 @@ def _occluding_pole(canvas: Canvas, lay: Layout, rng: Rng) -> None:
     """A near lineside pole crossing the disc's place (with or without a disc)."""
     u, v = lay.camera.project(np.asarray([lay.disc_pos]))[0]
     r_px = lay.camera.focal * lay.disc_radius / lay.camera.depth(lay.disc_pos)
-    width = r_px * uniform(rng, (0.4, 1.2))
-    cx = u + r_px * uniform(rng, (-1.0, 1.0))
+    width = r_px * uniform(rng, RANGES.pole_width)
+    cx = u + r_px * uniform(rng, RANGES.pole_offset) * (1.0 if rng.random() < 0.5 else -1.0)
     bottom = min(lay.height, v + r_px * uniform(rng, (3.0, 20.0)))
     grey = uniform(rng, (60.0, 170.0))
     xs = np.arange(lay.width, dtype=np.float32)

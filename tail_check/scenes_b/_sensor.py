@@ -56,7 +56,9 @@ def optics(image: FloatImage, rng: Rng, *, night: bool) -> FloatImage:
 
 def sensor(image: FloatImage, rng: Rng, *, night: bool) -> Uint8Image:
     """Exposure error, white balance, shot and read noise, tone curve → uint8."""
-    gain = uniform(rng, RANGES.exposure_gain) * (uniform(rng, (1.5, 3.0)) if night else 1.0)
+    bad = rng.random() < RANGES.p_bad_exposure
+    gain = uniform(rng, RANGES.bad_exposure_gain if bad else RANGES.exposure_gain)
+    gain *= uniform(rng, (1.5, 3.0)) if night else 1.0
     balance = np.asarray([uniform(rng, (0.92, 1.08)) for _ in range(3)], np.float32)
     linear = np.clip(image * gain * balance / 255.0, 0.0, None)
     sigma = uniform(rng, RANGES.noise_sigma) * (2.5 if night else 1.0) / 255.0
