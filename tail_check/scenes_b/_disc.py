@@ -40,8 +40,9 @@ def choose_look(rng: Rng, *, snowy: bool, night: bool) -> DiscLook:
     sat = uniform(rng, (110.0, 175.0)) if faded else uniform(rng, (175.0, 250.0))
     val = uniform(rng, (120.0, 235.0))
     field = hsv_to_bgr(hue, sat, val)
-    reflector = hsv_to_bgr(hue + uniform(rng, (-3.0, 3.0)), min(255.0, sat + 20.0),
-                           min(255.0, val * uniform(rng, (1.1, 1.4))))
+    # the prismatic reflector reads brighter and a little less saturated than the paint
+    reflector = hsv_to_bgr(hue + uniform(rng, (-3.0, 3.0)), sat * uniform(rng, (0.8, 0.95)),
+                           min(255.0, val * uniform(rng, (1.15, 1.4)) + 20.0))
     rim: BGR | None = None
     draw = rng.random()
     if draw < RANGES.p_white_rim:
