@@ -109,7 +109,7 @@ def test_samples_at_the_limits_are_applied(client: TestClient) -> None:
     """The edges of every range are valid samples, and they move the filter."""
     keys = build_line(client)
     lim = SAMPLE_LIMITS
-    edges = [
+    edges: list[dict[str, Any]] = [
         {"accel_mps2": lim.max_abs_accel_mps2},
         {"accel_mps2": -lim.max_abs_accel_mps2},
         {"gnss_speed_mps": math.nextafter(lim.max_gnss_speed_mps, 0.0), "gnss_delay_s": 0.0},
@@ -181,14 +181,15 @@ def test_every_sample_the_schema_accepts_is_applied(body: dict[str, Any]) -> Non
     if body["t"] is None or body["accel_mps2"] is None:
         assert event is None  # both are required numbers
         return
-    values = [body.get(k) for k in ("t", "accel_mps2", "gnss_speed_mps", "gnss_delay_s")]
-    values += [body.get("gnss_lat"), body.get("gnss_lon")]
-    problem = sample_problem(*values)
+    t, accel = float(body["t"]), float(body["accel_mps2"])
+    optional = [body.get(k) for k in ("gnss_speed_mps", "gnss_delay_s", "gnss_lat", "gnss_lon")]
+    speed, delay, lat, lon = optional
+    problem = sample_problem(t, accel, speed, delay, lat, lon)
     # one rule set: the schema refuses exactly what the rules refuse
     assert (event is None) == (problem is not None), (body, problem)
     if event is None:
         with pytest.raises(SampleRuleError):
-            check_sample(*values)
+            check_sample(t, accel, speed, delay, lat, lon)
         return
     # ... and what it accepts, the filter applies (a new train, and one already running)
     for prior in ((), (body["t"] - 1.0,)):
