@@ -13,11 +13,14 @@ from pydantic import (
     ConfigDict,
     Field,
     TypeAdapter,
+    ValidationError,
     model_validator,
 )
+from pydantic_core import InitErrorDetails, PydanticCustomError
 
 from core.models import DEVICE_KINDS
 from identification.eot import PACKET_BITS, parse_packet
+from motion.samples import SAMPLE_LIMITS, sample_problem
 
 EARLIEST = datetime(2000, 1, 1, tzinfo=UTC)
 LATEST = datetime(2100, 1, 1, tzinfo=UTC)
@@ -139,18 +142,63 @@ class Measurement(EventBase):
     values: MeasuredValues
 
 
+# The motion-sample rules live in the pure motion package, with the filter that applies them:
+# the bounds below are read from them (so OpenAPI shows them) and the validator runs them all.
+_LIM = SAMPLE_LIMITS
+
+
 class MotionSample(EventBase):
     kind: Literal["motion_sample"]
     senders = frozenset({"onboard_unit"})
     train: TrainNumber
     t: Annotated[float, Field(allow_inf_nan=False)]
-    accel_mps2: Annotated[float, Field(ge=-50, le=50, allow_inf_nan=False)]
-    gnss_speed_mps: Annotated[float, Field(ge=0, le=200, allow_inf_nan=False)] | None = None
-    gnss_delay_s: Annotated[float, Field(ge=0, le=600, allow_inf_nan=False)] | None = None
+    accel_mps2: Annotated[
+        float,
+        Field(ge=-_LIM.max_abs_accel_mps2, le=_LIM.max_abs_accel_mps2, allow_inf_nan=False),
+    ]
+    gnss_speed_mps: (
+        Annotated[float, Field(ge=0, lt=_LIM.max_gnss_speed_mps, allow_inf_nan=False)] | None
+    ) = None
+    gnss_delay_s: (
+        Annotated[float, Field(ge=0, le=_LIM.max_gnss_delay_s, allow_inf_nan=False)] | None
+    ) = None
     marker_id: Annotated[str, Field(min_length=1, max_length=64)] | None = None
     # Optional GNSS position, used to place a marker the reader missed (depot addition).
-    gnss_lat: Annotated[float, Field(ge=-90, le=90, allow_inf_nan=False)] | None = None
-    gnss_lon: Annotated[float, Field(ge=-180, le=180, allow_inf_nan=False)] | None = None
+    gnss_lat: (
+        Annotated[
+            float,
+            Field(ge=-_LIM.max_abs_lat_deg, le=_LIM.max_abs_lat_deg, allow_inf_nan=False),
+        ]
+        | None
+    ) = None
+    gnss_lon: (
+        Annotated[
+            float,
+            Field(ge=-_LIM.max_abs_lon_deg, le=_LIM.max_abs_lon_deg, allow_inf_nan=False),
+        ]
+        | None
+    ) = None
+
+    @model_validator(mode="after")
+    def _follows_the_sample_rules(self) -> MotionSample:
+        """All of ``motion.samples.sample_problem`` (e.g. lat and lon together); the error
+        names the field, so the 422 does too."""
+        problem = sample_problem(
+            self.t,
+            self.accel_mps2,
+            self.gnss_speed_mps,
+            self.gnss_delay_s,
+            self.gnss_lat,
+            self.gnss_lon,
+        )
+        if problem is not None:
+            # Raised as a ValidationError located at the field (pydantic-core keeps the
+            # location; a plain ValueError here would name the whole event instead).
+            field, message = problem
+            error = PydanticCustomError("motion_sample_rule", message)
+            details = [InitErrorDetails(type=error, loc=(field,), input=getattr(self, field))]
+            raise ValidationError.from_exception_data(type(self).__name__, details)
+        return self
 
 
 class EotStatus(SectionEvent):

@@ -1,4 +1,8 @@
-"""Inputs, outputs and tuning of :class:`motion.fusion.TrackFilter`."""
+"""Inputs, outputs and tuning of :class:`motion.fusion.TrackFilter`, and the
+rules a ``motion_sample`` must satisfy (:data:`SAMPLE_LIMITS`,
+:func:`sample_problem`): written once here and used both by the API schema
+(``ingest/schemas.py``: a sample that breaks them is answered 422) and by the
+filter, so a sample the API accepts is always applied."""
 
 from __future__ import annotations
 
@@ -7,11 +11,113 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-__all__ = ["FilterConfig", "MotionSample", "StaleSampleError", "TrackState", "coerce_sample"]
+__all__ = [
+    "SAMPLE_LIMITS",
+    "FilterConfig",
+    "MotionSample",
+    "SampleLimits",
+    "SampleRuleError",
+    "StaleSampleError",
+    "TrackState",
+    "check_sample",
+    "coerce_sample",
+    "sample_problem",
+]
 
 
 class StaleSampleError(ValueError):
     """The sample is older than the filter's buffer; it cannot be used."""
+
+
+class SampleRuleError(ValueError):
+    """A sample breaks one of the :class:`SampleLimits` rules; ``field`` names it."""
+
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(message)
+        self.field = field
+
+
+@dataclass(frozen=True, slots=True)
+class SampleLimits:
+    """Plausible values of a ``motion_sample`` (protocol v1); SI units, degrees.
+
+    A sample outside them comes from a broken or misconfigured on-board unit
+    and is refused as a whole (HTTP 422; ``ValueError`` from the filter),
+    never stored and then skipped.  Besides these bounds every value must be
+    a finite number, and ``gnss_lat``/``gnss_lon`` come together or not at all.
+    """
+
+    # |a| above 5 g is a sensor-scale error (mg or ft/s² sent as m/s²), not a train.
+    max_abs_accel_mps2: float = 50.0
+    # Exclusive: 200 m/s = 720 km/h is above any train; a receiver reporting it is broken.
+    max_gnss_speed_mps: float = 200.0
+    # Inclusive: how late a GNSS speed may report; the filter uses one only
+    # while it is inside its buffer (``FilterConfig.max_delay_s``).
+    max_gnss_delay_s: float = 600.0
+    max_abs_lat_deg: float = 90.0
+    max_abs_lon_deg: float = 180.0
+
+
+SAMPLE_LIMITS = SampleLimits()
+
+
+def _not_finite(**values: float | None) -> str | None:
+    for name, v in values.items():
+        if v is not None and not math.isfinite(v):
+            return name
+    return None
+
+
+def sample_problem(
+    t: float,
+    accel_mps2: float,
+    gnss_speed_mps: float | None,
+    delay_s: float | None,
+    gnss_lat: float | None,
+    gnss_lon: float | None,
+    *,
+    limits: SampleLimits = SAMPLE_LIMITS,
+) -> tuple[str, str] | None:
+    """The first rule a sample breaks, as ``(field, message)``; ``None`` when it is valid.
+
+    ``delay_s`` is the sample's ``gnss_delay_s`` (``None``: not given).
+    """
+    bad = _not_finite(
+        t=t,
+        accel_mps2=accel_mps2,
+        gnss_speed_mps=gnss_speed_mps,
+        gnss_delay_s=delay_s,
+        gnss_lat=gnss_lat,
+        gnss_lon=gnss_lon,
+    )
+    if bad is not None:
+        return bad, f"{bad} must be a finite number"
+    lim = limits
+    if abs(accel_mps2) > lim.max_abs_accel_mps2:
+        return "accel_mps2", (
+            f"accel_mps2 out of range (|a| > {lim.max_abs_accel_mps2:g} m/s²): "
+            "check the sensor scale"
+        )
+    if gnss_speed_mps is not None and not (0.0 <= gnss_speed_mps < lim.max_gnss_speed_mps):
+        return "gnss_speed_mps", (
+            f"gnss_speed_mps must be in [0, {lim.max_gnss_speed_mps:g}) m/s (a speed over ground)"
+        )
+    if delay_s is not None and not (0.0 <= delay_s <= lim.max_gnss_delay_s):
+        return "gnss_delay_s", f"gnss_delay_s must be in [0, {lim.max_gnss_delay_s:g}] s"
+    if (gnss_lat is None) != (gnss_lon is None):
+        missing = "gnss_lon" if gnss_lon is None else "gnss_lat"
+        return missing, "gnss_lat and gnss_lon must be given together (a GNSS fix has both)"
+    if gnss_lat is not None and abs(gnss_lat) > lim.max_abs_lat_deg:
+        return (
+            "gnss_lat",
+            f"gnss_lat must be in [-{lim.max_abs_lat_deg:g}, {lim.max_abs_lat_deg:g}]°",
+        )
+    if gnss_lon is not None and abs(gnss_lon) > lim.max_abs_lon_deg:
+        return (
+            "gnss_lon",
+            f"gnss_lon must be in [-{lim.max_abs_lon_deg:g}, {lim.max_abs_lon_deg:g}]°",
+        )
+    return None
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,7 +168,12 @@ class TrackState:
 
 @dataclass(frozen=True)
 class FilterConfig:
-    """Tuning of :class:`TrackFilter` (SI units)."""
+    """Tuning of :class:`TrackFilter` (SI units).
+
+    The fields after ``standstill_mps`` were added after snapshot version 1;
+    a snapshot records them only when they differ from their defaults, so
+    snapshots of default-tuned filters keep the version-1 form.
+    """
 
     orientation: int = 1  # +1: the car's forward axis points to increasing coordinate
     accel_noise_mps2: float = 0.05  # per-sample accelerometer noise (vibration)
@@ -86,6 +197,15 @@ class FilterConfig:
     unknown_position_sigma: float = 1e5
     lost_position_sigma: float = 50.0  # σ beyond which the position counts as unknown
     standstill_mps: float = 0.05
+    # -- added after snapshot version 1 (see the class documentation) --
+    # A projected fix farther than fix_offset_sigmas·gnss_position_sigma +
+    # fix_offset_margin_m from the track geometry is not on this line (another
+    # track, a multipath fix): it is not used.
+    fix_offset_sigmas: float = 5.0
+    fix_offset_margin_m: float = 50.0
+    # The direction of motion is reported only when |speed| exceeds this many
+    # σ of speed (and standstill_mps).
+    direction_sigmas: float = 2.0
 
     def __post_init__(self) -> None:
         if self.orientation not in (1, -1):
@@ -135,24 +255,37 @@ def check_sample(
     t: float,
     accel_mps2: float,
     gnss_speed_mps: float | None,
-    delay_s: float,
+    delay_s: float | None,
     gnss_lat: float | None,
     gnss_lon: float | None,
+    *,
+    limits: SampleLimits = SAMPLE_LIMITS,
 ) -> None:
-    """Raise ``ValueError`` naming the first implausible field of a sample."""
-    if not (math.isfinite(t) and math.isfinite(accel_mps2)):
-        raise ValueError("t and accel_mps2 must be finite numbers")
-    if abs(accel_mps2) > 50.0:
-        raise ValueError("accel_mps2 out of range (|a| > 50 m/s²): check the sensor scale")
-    if gnss_speed_mps is not None and not (0.0 <= gnss_speed_mps < 200.0):
-        raise ValueError("gnss_speed_mps must be in [0, 200) m/s (a speed over ground)")
-    if not (0.0 <= delay_s < 3600.0):
-        raise ValueError("gnss_delay_s must be in [0, 3600) s")
-    if (gnss_lat is None) != (gnss_lon is None):
-        raise ValueError("gnss_lat and gnss_lon must be given together")
+    """Raise :class:`SampleRuleError` naming the first rule the sample breaks.
+
+    The same rules as :func:`sample_problem`, tested first in one expression
+    (the filter calls this for every sample); every comparison with NaN or an
+    infinity outside the limits is false, so those reach the full check.
+    """
+    lim = limits
     if (
-        gnss_lat is not None
-        and gnss_lon is not None
-        and not (-90.0 <= gnss_lat <= 90.0 and -180.0 <= gnss_lon <= 180.0)
+        math.isfinite(t)
+        and -lim.max_abs_accel_mps2 <= accel_mps2 <= lim.max_abs_accel_mps2
+        and (gnss_speed_mps is None or 0.0 <= gnss_speed_mps < lim.max_gnss_speed_mps)
+        and (delay_s is None or 0.0 <= delay_s <= lim.max_gnss_delay_s)
+        and (
+            (gnss_lat is None and gnss_lon is None)
+            or (
+                gnss_lat is not None
+                and gnss_lon is not None
+                and -lim.max_abs_lat_deg <= gnss_lat <= lim.max_abs_lat_deg
+                and -lim.max_abs_lon_deg <= gnss_lon <= lim.max_abs_lon_deg
+            )
+        )
     ):
-        raise ValueError("gnss_lat/gnss_lon out of range (degrees)")
+        return
+    problem = sample_problem(
+        t, accel_mps2, gnss_speed_mps, delay_s, gnss_lat, gnss_lon, limits=limits
+    )
+    if problem is not None:
+        raise SampleRuleError(*problem)

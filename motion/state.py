@@ -1,0 +1,109 @@
+"""The JSON snapshot of a :class:`motion.fusion.TrackFilter` (version 1).
+
+The service keeps one per train (``train_positions.filter_state``) so that
+any API worker can continue the train's filter; snapshots written by an
+earlier release must load in a later one, and a later release must write the
+same document for the same filter (workers of two releases run side by side
+during an upgrade).  The document, a few kB::
+
+    {"version": 1,
+     "table": <MarkerTable.fingerprint>,
+     "config": {<FilterConfig fields>},
+     "buffer": [[t, accel, [[kind, value, variance], ...] | null,
+                 s, u, b, p00, p01, p02, p11, p12, p22, real], ...],
+     "post": [s, u, b, p00, p01, p02, p11, p12, p22],
+     "reader": {<MarkerReader.to_dict()>},
+     "last_fix_t": t | null, "last_gnss_t": t | null,
+     "counters": [stale_measurements, unknown_markers]}
+
+``config`` holds every version-1 field, and a field added since only when it
+differs from its default (so default-tuned snapshots keep the version-1 form).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from .buffer import Entry
+from .model import Estimate, Measurement, estimate
+from .samples import FilterConfig
+
+__all__ = ["SNAPSHOT_VERSION", "Snapshot"]
+
+SNAPSHOT_VERSION = 1
+# FilterConfig fields added after version 1: written only when not at their default.
+_ADDED_AFTER_V1 = frozenset({"fix_offset_sigmas", "fix_offset_margin_m", "direction_sigmas"})
+_CONFIG_DEFAULTS = asdict(FilterConfig())
+
+
+def _encode_config(cfg: FilterConfig) -> dict[str, Any]:
+    return {
+        k: v for k, v in asdict(cfg).items() if k not in _ADDED_AFTER_V1 or v != _CONFIG_DEFAULTS[k]
+    }
+
+
+def _encode_entry(e: Entry) -> list[Any]:
+    ms = [[int(m.kind), m.value, m.variance] for m in e.measurements] if e.measurements else None
+    return [e.t, e.accel, ms, *e.prior, bool(e.real)]
+
+
+def _decode_entry(e: list[Any]) -> Entry:
+    ms = [Measurement(int(m[0]), float(m[1]), float(m[2])) for m in e[2]] if e[2] else None
+    prior = estimate(e[3:12])
+    return Entry(float(e[0]), float(e[1]), ms, prior, bool(e[12]))
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """Everything a filter needs to continue, apart from its marker table."""
+
+    table_fingerprint: str
+    config: FilterConfig
+    entries: list[Entry]
+    post: Estimate | None  # None before the first sample
+    reader: dict[str, Any]
+    last_fix_t: float  # -inf: no fix used yet
+    last_gnss_t: float | None
+    stale_measurements: int = 0
+    unknown_markers: int = 0
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON-safe document (key order fixed: it is compared byte for byte)."""
+        return {
+            "version": SNAPSHOT_VERSION,
+            "table": self.table_fingerprint,
+            "config": _encode_config(self.config),
+            "buffer": [_encode_entry(e) for e in self.entries],
+            "post": [] if self.post is None else list(self.post),
+            "reader": self.reader,
+            "last_fix_t": None if math.isinf(self.last_fix_t) else self.last_fix_t,
+            "last_gnss_t": self.last_gnss_t,
+            "counters": [self.stale_measurements, self.unknown_markers],
+        }
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any], table_fingerprint: str) -> Snapshot:
+        """Parse a document of :meth:`to_json` taken with the marker table of
+        ``table_fingerprint``; ``ValueError`` if it is not one."""
+        if d.get("version") != SNAPSHOT_VERSION:
+            raise ValueError("unsupported filter snapshot version")
+        if d.get("table") != table_fingerprint:
+            raise ValueError("the snapshot was taken with a different marker table")
+        post = [float(v) for v in d["post"]]
+        lf = d.get("last_fix_t")
+        lg = d.get("last_gnss_t")
+        stale, unknown = (int(v) for v in d.get("counters", [0, 0]))
+        return cls(
+            table_fingerprint=table_fingerprint,
+            config=FilterConfig(**d["config"]),
+            entries=[_decode_entry(e) for e in d["buffer"]],
+            post=estimate(post) if post else None,
+            reader=d.get("reader", {}),
+            last_fix_t=-math.inf if lf is None else float(lf),
+            last_gnss_t=None if lg is None else float(lg),
+            stale_measurements=stale,
+            unknown_markers=unknown,
+        )
