@@ -112,13 +112,13 @@ def create_app() -> FastAPI:
         os.environ["FLOOR_DATABASE_URL"], pool_pre_ping=True, pool_size=10, max_overflow=20
     )
     with engine.connect() as connection:
-        devices = dict(
-            connection.execute(text("SELECT key_hash, id FROM floor_devices")).tuples().all()
+        devices: dict[str, str] = dict(
+            connection.execute(text("SELECT key_hash, id FROM floor_devices")).all()
         )
     app = FastAPI()
 
     def device_for(key: str | None) -> str:
-        device = devices.get(key_hash(key)) if key else None
+        device: str | None = devices.get(key_hash(key)) if key else None
         if device is None:
             raise HTTPException(401, "unknown device key")
         return device
@@ -135,10 +135,11 @@ def create_app() -> FastAPI:
         try:
             if "events" in body:
                 batch = FloorBatch.model_validate(body)
+                rows = [
+                    _row(device, e, b) for e, b in zip(batch.events, body["events"], strict=True)
+                ]
                 with engine.begin() as connection:
-                    stored = connection.execute(
-                        INSERT, [_row(device, e, b) for e, b in zip(batch.events, body["events"], strict=True)]
-                    ).all()
+                    stored = connection.execute(INSERT, rows).all()
                 return JSONResponse({"stored": len(stored)}, status_code=200)
             event = FloorEvent.model_validate(body)
         except ValidationError as exc:
