@@ -30,7 +30,7 @@ from sqlalchemy.orm import Session
 
 from core.errors import Conflict, DepotError, Forbidden, Unprocessable, validation_errors
 from core.models import Device, Section
-from ingest.handlers import HANDLERS, Derivation, derive
+from ingest.handlers import Derivation, derive, has_handlers
 from ingest.liveness import restore_pending, snapshot_pending
 from ingest.models import RawEvent
 from ingest.rows import (
@@ -112,7 +112,7 @@ def check_section(session: Session, device: Device, section_id: str | None) -> N
 
 def _answer_now(event: Any) -> dict[str, Any] | None:
     """Events no feature derives from answer just "created": stored in the insert itself."""
-    if HANDLERS.get(event.kind):
+    if has_handlers(event.kind):
         return None
     return {"event_id": event.event_id, "status": "created"}
 
@@ -177,7 +177,7 @@ def run_derivation(
 ) -> dict[str, Any]:
     """Derive state from a stored event; a failing derivation never loses the raw event."""
     derivation = Derivation(session, raw, event, device, replaying)
-    if not HANDLERS.get(raw.kind):
+    if not has_handlers(raw.kind):
         return derive(derivation)  # liveness only: nothing that can fail half-way
     seen = snapshot_pending(session)
     try:
