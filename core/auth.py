@@ -85,6 +85,7 @@ class DeviceKeyCache:
             section=device.section,
             kind=device.kind,
             key_hash=device.key_hash,
+            decommissioned_at=device.decommissioned_at,
         )
         if self.ttl_s > 0:
             with self._lock:

@@ -31,7 +31,7 @@ UNNEST_INSERT = text(
     " CAST(:occurred_at AS timestamptz[]), CAST(:received_at AS timestamptz[]),"
     " CAST(:section AS text[]), CAST(:body AS text[]), CAST(:body_sha256 AS text[]),"
     " CAST(:result AS text[])) AS u(d, e, k, o, r, s, b, h, res)"
-    " ON CONFLICT (device_id, event_id) DO NOTHING RETURNING id, event_id"
+    " ON CONFLICT (device_id, event_id) DO NOTHING RETURNING id, device_id, event_id"
 )
 
 
@@ -76,8 +76,8 @@ def insert_one(session: Session, values: dict[str, Any]) -> int | None:
     return session.execute(statement).scalar_one_or_none()
 
 
-def insert_many(session: Session, rows: list[dict[str, Any]]) -> dict[str, int]:
-    """Insert the new rows in one statement; returns their ids by ``event_id``.
+def insert_many(session: Session, rows: list[dict[str, Any]]) -> dict[tuple[str, str], int]:
+    """Insert the new rows in one statement; returns their ids by (device, ``event_id``).
 
     PostgreSQL gets ``INSERT … SELECT FROM unnest(arrays)``: one statement of constant text
     whatever the batch size, so neither SQLAlchemy nor the server compiles 500 VALUES tuples.
@@ -85,13 +85,13 @@ def insert_many(session: Session, rows: list[dict[str, Any]]) -> dict[str, int]:
     if not rows:
         return {}
     if session.get_bind().dialect.name != "postgresql" or HAS_TRANSPORT:
-        statement = _insert(session).returning(RAW.c.id, RAW.c.event_id)
-        return {e: i for i, e in session.execute(statement, rows)}
+        statement = _insert(session).returning(RAW.c.id, RAW.c.device_id, RAW.c.event_id)
+        return {(d, e): i for i, d, e in session.execute(statement, rows)}
     arrays: dict[str, list[Any]] = {c: [r[c] for r in rows] for c in COLUMNS}
     arrays["body_sha256"] = [r["body_sha256"] for r in rows]
     arrays["body"] = [json.dumps(r["body"]) for r in rows]
     arrays["result"] = [json.dumps(r["result"]) for r in rows]
-    return {e: i for i, e in session.execute(UNNEST_INSERT, arrays)}
+    return {(d, e): i for i, d, e in session.execute(UNNEST_INSERT, arrays)}
 
 
 def stored(session: Session, device_id: str, event_id: str) -> tuple[str, dict[str, Any]]:

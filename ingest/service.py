@@ -226,19 +226,49 @@ def store_group(
 ) -> list[tuple[int, dict[str, Any]] | BaseException]:
     """Store validated (device, event, payload) items in one transaction (group commit).
 
-    They are processed in section, then device order, so that two workers' groups take the
-    section locks in the same order. A refusal (409, 422) is that item's outcome; it writes
-    nothing, so its neighbours go on. The caller commits.
+    Optimistic: the raw rows go in with one statement, the derivations run in section, then
+    device order (two workers' groups take the section locks in the same order) without a
+    savepoint each, the answers go in with one executemany. A refusal (409, 422) is that
+    item's outcome and writes nothing. Any other failure propagates: the caller rolls the
+    group back and stores every item by itself (:func:`store_validated`, with the savepoint
+    that keeps a raw event whose derivation fails). The caller commits.
     """
     outcomes: list[tuple[int, dict[str, Any]] | BaseException | None] = [None] * len(items)
-    answers: list[dict[str, Any]] = []
-    for index in sorted(range(len(items)), key=lambda i: _lock_order(items[i])):
+    order = sorted(range(len(items)), key=lambda i: _lock_order(items[i]))
+    rows: dict[tuple[str, str], dict[str, Any]] = {}
+    for index in order:
         device, event, body = items[index]
         try:
             check_section(session, device, getattr(event, "section", None))
-            outcomes[index] = store_event(session, device, event, body, answers=answers)
         except DepotError as exc:
             outcomes[index] = exc
+            continue
+        answer = _answer_now(event)
+        rows.setdefault((device.id, event.event_id), raw_values(device, event, body, answer=answer))
+    inserted = insert_many(session, list(rows.values()))
+    answers: list[dict[str, Any]] = []
+    for index in order:
+        if outcomes[index] is not None:
+            continue
+        device, event, body = items[index]
+        raw_id = inserted.pop((device.id, event.event_id), None)
+        if raw_id is None:  # stored before, or twice in this group
+            try:
+                outcomes[index] = _duplicate(
+                    session, device, event, canonical_sha256(body), answers
+                )
+            except DepotError as exc:
+                outcomes[index] = exc
+            continue
+        values = rows[(device.id, event.event_id)]
+        raw = as_raw(raw_id, values)
+        derived = derive(Derivation(session, raw, event, device))
+        if values["result"]:
+            outcomes[index] = (201, values["result"])
+            continue
+        result = {"event_id": event.event_id, "status": "created", **derived}
+        answers.append({"id": raw_id, "result": result, "derive_error": None})
+        outcomes[index] = (201, result)
     write_answers(session, answers)
     return [o for o in outcomes if o is not None]
 
@@ -316,7 +346,7 @@ def accept_batch(
     inserted = insert_many(session, list(rows.values()))
     answers: list[dict[str, Any]] = []
     for index, event, body in first.values():
-        raw_id = inserted.get(event.event_id)
+        raw_id = inserted.get((device.id, event.event_id))
         if raw_id is None:
             results[index] = _stored_item(session, device, event, body, answers)
             continue
