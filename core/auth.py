@@ -5,6 +5,9 @@ from __future__ import annotations
 import hashlib
 import hmac
 import secrets
+import threading
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Annotated
 
@@ -51,6 +54,71 @@ def person_for_token(session: Session, token: str) -> Principal | None:
     return Principal(role=user.role, name=user.name)
 
 
+class DeviceKeyCache:
+    """Devices by the hash of their key, kept in the process for at most ``ttl_s`` seconds.
+
+    Saves the device look-up on every event. The bound on revocation is the TTL: a key that is
+    replaced, or a device that is removed, is refused by every worker at most ``ttl_s`` seconds
+    later (``DEPOT_DEVICE_KEY_TTL_S``, default 2, at most 5; 0 turns the cache off), and at once
+    by the worker that calls :meth:`invalidate`. Unknown keys are never cached, so a new key
+    works at once. The cached devices are detached copies: read them, never write them.
+    """
+
+    def __init__(self, ttl_s: float, *, clock: Callable[[], float] = time.monotonic) -> None:
+        self.ttl_s, self._clock = ttl_s, clock
+        self._entries: dict[str, tuple[float, Device]] = {}
+        self._lock = threading.Lock()
+
+    def lookup(self, session: Session, key: str) -> Device | None:
+        digest = hash_secret(key)
+        now = self._clock()
+        entry = self._entries.get(digest)
+        if entry is not None and now - entry[0] < self.ttl_s:
+            return entry[1]
+        device = session.scalar(select(Device).where(Device.key_hash == digest))
+        if device is None:
+            self._entries.pop(digest, None)
+            return None
+        copy = Device(
+            id=device.id,
+            station=device.station,
+            section=device.section,
+            kind=device.kind,
+            key_hash=device.key_hash,
+            decommissioned_at=device.decommissioned_at,
+        )
+        if self.ttl_s > 0:
+            with self._lock:
+                self._entries[digest] = (now, copy)
+        return copy
+
+    def invalidate(self, device_id: str | None = None) -> None:
+        """Forget one device (after its key changed) or every device."""
+        with self._lock:
+            for digest, (_, device) in list(self._entries.items()):
+                if device_id is None or device.id == device_id:
+                    del self._entries[digest]
+
+
+_device_caches: dict[tuple[float, str], DeviceKeyCache] = {}
+
+
+def device_cache() -> DeviceKeyCache:
+    """The process's cache for the configured database, with the TTL of the settings."""
+    settings = get_settings()
+    scope = (settings.device_key_ttl_s, settings.resolved_database_url)
+    cache = _device_caches.get(scope)
+    if cache is None:
+        _device_caches.clear()  # settings changed (tests): nothing cached for the old ones
+        cache = _device_caches[scope] = DeviceKeyCache(scope[0])
+    return cache
+
+
+def device_for_key(session: Session, key: str) -> Device | None:
+    """The device a key belongs to (cached, see :class:`DeviceKeyCache`), or None."""
+    return device_cache().lookup(session, key)
+
+
 def get_principal(
     session: DbSession,
     bearer: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
@@ -65,7 +133,7 @@ def get_principal(
             )
         return person
     if device_key:
-        device = session.scalar(select(Device).where(Device.key_hash == hash_secret(device_key)))
+        device = device_for_key(session, device_key)
         if device is None:
             raise Unauthorized("the X-Device-Key is not known; register the device to get a key")
         if device.decommissioned_at is not None:

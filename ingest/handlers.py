@@ -10,12 +10,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from datetime import timedelta
 from typing import Any
 
 from sqlalchemy.orm import Session
 
 from core.models import Device
+from ingest.liveness import touch
 from ingest.models import RawEvent
 from ingest.schemas import ALL_EVENT_MODELS, EventBase, kind_of
 
@@ -33,7 +33,6 @@ class Derivation:
 
 Handler = Callable[[Derivation], dict[str, Any] | None]
 HandlerTable = Mapping[type[EventBase], Sequence[Handler]]
-LAST_SEEN_GRANULARITY = timedelta(seconds=5)
 # The installed table, indexed by kind (filled by `install`; empty means liveness only).
 HANDLERS: dict[str, tuple[Handler, ...]] = {}
 
@@ -59,12 +58,14 @@ def has_handlers(kind: str) -> bool:
 
 def derive(derivation: Derivation) -> dict[str, Any]:
     """Run every handler of the event's kind; merge what they report for the client."""
-    device = derivation.device
-    occurred = derivation.raw.occurred_at
     # Liveness has the heartbeat period's granularity: a device sending many events a second
     # need not rewrite its row for each one (decisions read staleness from the raw events).
-    if device.last_seen_at is None or occurred > device.last_seen_at + LAST_SEEN_GRANULARITY:
-        device.last_seen_at = occurred
+    touch(
+        derivation.session,
+        derivation.device,
+        derivation.raw.occurred_at,
+        replaying=derivation.replaying,
+    )
     result: dict[str, Any] = {}
     for handler in HANDLERS.get(derivation.raw.kind, ()):
         result.update(handler(derivation) or {})

@@ -5,7 +5,7 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import select, update
+from sqlalchemy import event, select, update
 from sqlalchemy.orm import Session
 
 from core.auth import Principal
@@ -29,12 +29,32 @@ ACTION_STATES = {"clear": "free", "keep_blocked": "blocked", "sweep": "awaiting_
 SYSTEM = Principal(role="system", name="depot")  # author of the audit records it writes itself
 
 
+LOCKED = "depot_locked_sections"
+
+
 def lock_section(session: Session, section_id: str) -> Section:
-    """The section row, locked for the transaction: one writer decides a section at a time."""
+    """The section row, locked for the transaction: one writer decides a section at a time.
+
+    Locked once per transaction: a group commit deriving many events of one section asks the
+    database once; the row in the session is current, as nobody else may change it meanwhile.
+    """
+    locked: set[str] = session.info.setdefault(LOCKED, set())
+    if section_id in locked:
+        held = session.get(Section, section_id)
+        if held is not None:
+            return held
     section = session.scalar(select(Section).where(Section.id == section_id).with_for_update())
     if section is None:
         raise NotFound(f"section {section_id!r} does not exist")
+    locked.add(section_id)
     return section
+
+
+@event.listens_for(Session, "after_soft_rollback")
+@event.listens_for(Session, "after_commit")
+def _locks_released(session: Session, *_: object) -> None:
+    # A commit ends the transaction; a rollback, even to a savepoint, may release the lock.
+    session.info.pop(LOCKED, None)
 
 
 def _set_state(section: Section, state: str, at: datetime) -> None:

@@ -14,7 +14,7 @@ from datetime import datetime, timedelta
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from core.auth import hash_secret, new_secret
+from core.auth import device_cache, hash_secret, new_secret
 from core.database import utcnow
 from core.errors import Conflict, NotFound, Unprocessable
 from core.models import ROLES, CredentialChange, Device, User
@@ -113,6 +113,7 @@ def rotate_device_key(session: Session, device_id: str, *, actor: str) -> tuple[
     device.key_hash = hash_secret(key)
     _record(session, actor, "device_key_rotated", "device", device_id)
     session.flush()
+    device_cache().invalidate(device_id)  # this worker at once; the others within the TTL
     return device, key
 
 
@@ -123,6 +124,7 @@ def decommission_device(session: Session, device_id: str, *, actor: str) -> Devi
     device.key_hash = hash_secret(new_secret())
     _record(session, actor, "device_decommissioned", "device", device_id)
     session.flush()
+    device_cache().invalidate(device_id)  # this worker at once; the others within the TTL
     return device
 
 
