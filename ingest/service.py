@@ -95,14 +95,14 @@ def _insert_raw(session: Session, values: dict[str, Any]) -> RawEvent | None:
 
 
 def store_event(
-    session: Session, device: Device, event: Any, body: dict[str, Any]
+    session: Session, device: Device, event: Any, body: dict[str, Any], *, transport: str = "http"
 ) -> tuple[int, dict[str, Any]]:
     """Store one validated event idempotently; returns (HTTP status, result body).
 
     201 for a new event (derived results included), 200 with the original result for a retry
     with the same body, 409 (raised) for the same ``event_id`` with a different body.
     """
-    values = _raw_values(device, event, body)
+    values = _raw_values(device, event, body, transport)
     digest = values["body_sha256"]
     raw = _insert_raw(session, values)
     if raw is None:
@@ -142,12 +142,14 @@ def run_derivation(
         return {"derive_error": raw.derive_error}
 
 
-def accept_event(session: Session, device: Device, payload: Any) -> tuple[int, dict[str, Any]]:
+def accept_event(
+    session: Session, device: Device, payload: Any, *, transport: str = "http"
+) -> tuple[int, dict[str, Any]]:
     event = parse_event(payload)
     check_device_may_send(device, event.kind)
     check_section(session, device, getattr(event, "section", None))
     # Stored exactly as received; the canonical hash makes key order irrelevant for retries.
-    return store_event(session, device, event, payload)
+    return store_event(session, device, event, payload, transport=transport)
 
 
 def _rejected(event_id: Any, exc: Unprocessable | Conflict | Forbidden) -> dict[str, Any]:
@@ -186,7 +188,9 @@ def _validated(
     return results, accepted
 
 
-def _raw_values(device: Device, event: Any, body: dict[str, Any]) -> dict[str, Any]:
+def _raw_values(
+    device: Device, event: Any, body: dict[str, Any], transport: str = "http"
+) -> dict[str, Any]:
     # Events no feature derives from answer just "created": store that answer with the row.
     derived = bool(HANDLERS.get(event.kind))
     return {
@@ -198,6 +202,7 @@ def _raw_values(device: Device, event: Any, body: dict[str, Any]) -> dict[str, A
         "body": body,
         "body_sha256": canonical_sha256(body),
         "result": {} if derived else {"event_id": event.event_id, "status": "created"},
+        "transport": transport,
     }
 
 
@@ -214,7 +219,9 @@ def _insert_many(session: Session, rows: list[dict[str, Any]]) -> dict[str, RawE
     return {raw.event_id: raw for raw in session.scalars(statement, rows)}
 
 
-def accept_batch(session: Session, device: Device, items: list[Any]) -> list[dict[str, Any]]:
+def accept_batch(
+    session: Session, device: Device, items: list[Any], *, transport: str = "http"
+) -> list[dict[str, Any]]:
     """Each item stands alone: a rejected item leaves the others stored.
 
     The new events are inserted with one multi-row statement (the unique key still decides
@@ -228,7 +235,9 @@ def accept_batch(session: Session, device: Device, items: list[Any]) -> list[dic
             repeats.append(entry)
         else:
             first[entry[1].event_id] = entry
-    inserted = _insert_many(session, [_raw_values(device, e, b) for _, e, b in first.values()])
+    inserted = _insert_many(
+        session, [_raw_values(device, e, b, transport) for _, e, b in first.values()]
+    )
     for index, event, body in first.values():
         raw = inserted.get(event.event_id)
         if raw is None:  # stored before: a retry, or a reuse of the id
