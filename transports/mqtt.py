@@ -90,6 +90,7 @@ class Bridge:
         )
         self.client.on_connect = self._on_connect
         self.client.on_message = self._on_message
+        self.client.on_subscribe = lambda *_: log.info("subscribed to %s", config.subscription)
         self.client.reconnect_delay_set(min_delay=1, max_delay=10)
 
     def _on_connect(self, client: mqtt.Client, _: Any, flags: Any, code: Any, __: Any) -> None:
