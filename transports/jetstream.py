@@ -179,7 +179,11 @@ class Consumer:
             while not self.stopping.is_set():
                 try:
                     msgs = await subscription.fetch(self.config.batch, timeout=1)
-                except nats.errors.TimeoutError:
+                except TimeoutError:  # nats-py raises its own or asyncio's: both are this
+                    continue
+                except nats.errors.Error as exc:  # the server went away: the client reconnects
+                    log.warning("fetch failed (%s); trying again", exc)
+                    await asyncio.sleep(1)
                     continue
                 await self._handle(nc, js, msgs)
         finally:

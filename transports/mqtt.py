@@ -92,6 +92,10 @@ class Bridge:
         self.client.on_message = self._on_message
         self.client.on_subscribe = lambda *_: log.info("subscribed to %s", config.subscription)
         self.client.reconnect_delay_set(min_delay=1, max_delay=10)
+        # Answers are sent at once, never held back behind paho's window of unacknowledged
+        # publishes: an acknowledgement must not leave before the answer that precedes it.
+        self.client.max_inflight_messages_set(0)
+        self.client.max_queued_messages_set(0)
 
     def _on_connect(self, client: mqtt.Client, _: Any, flags: Any, code: Any, __: Any) -> None:
         if code.is_failure:

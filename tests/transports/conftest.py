@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from tests.reliability.conftest import ADMIN_HEADERS
-from tests.reliability.loadgen import Device, build_line
+from tests.reliability.loadgen import Device, Payloads, build_line
 from tests.reliability.relkit import Server, depot_env, scratch_database
 from tests.transports.tkit import (
     Answers,
@@ -75,5 +75,12 @@ def line(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Line]:
                 answers, mqtt_devices, nats_devices,
             )  # fmt: skip
         finally:
-            for process in (*consumers, the_bridge, *servers):
+            for process in (*consumers, the_bridge):
                 process.stop()
+            for server in servers:
+                server.stop()
+
+
+@pytest.fixture(scope="module")
+def payloads() -> Payloads:
+    return Payloads()

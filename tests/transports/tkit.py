@@ -19,7 +19,7 @@ import uuid
 from collections import defaultdict
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Any
 
@@ -178,7 +178,7 @@ class MqttDevices:
         subscribed = threading.Event()
         self.client.on_subscribe = lambda *_: subscribed.set()
         self.client.on_message = lambda _c, _u, m: answers.record(
-            m.topic.rsplit("/", 1)[-1], m.payload
+            m.topic.rsplit("/", 1)[-1], bytes(m.payload)
         )
         self.client.connect(MQTT_HOST, MQTT_PORT)
         self.client.subscribe(f"{prefix}/results/+", qos=1)
@@ -252,10 +252,8 @@ class NatsDevices:
         async def delete() -> None:
             js = self.nc.jetstream()
             for suffix in ("EVENTS", "DEAD"):
-                try:
+                with suppress(NotFoundError):
                     await js.delete_stream(f"{prefix.upper()}_{suffix}")
-                except NotFoundError:
-                    pass
 
         self.call(delete())
 
