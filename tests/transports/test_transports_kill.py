@@ -84,7 +84,7 @@ class Driver:
             else:  # one JetStream message per device and phase: its events in their order
                 batch = {"events": [body for _, body in postings]}
                 broker["nats"].append((device.id, device.key, json.dumps(batch).encode()))
-        publishing = [
+        publishing: list[Future[Any]] = [
             self.pool.submit(lambda: [self.line.mqtt.publish(*m) for m in broker["mqtt"]]),
             self.pool.submit(self.line.nats.publish_all, broker["nats"]),
         ]
