@@ -13,7 +13,7 @@ from fastapi.security import APIKeyHeader, HTTPAuthorizationCredentials, HTTPBea
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from core.database import DbSession
+from core.database import DbSession, utcnow
 from core.errors import Forbidden, Unauthorized
 from core.models import Device, User
 from core.settings import get_settings
@@ -44,7 +44,11 @@ def person_for_token(session: Session, token: str) -> Principal | None:
     if hmac.compare_digest(token.encode(), get_settings().admin_token.encode()):
         return Principal(role="admin", name="admin")
     user = session.scalar(select(User).where(User.token_hash == hash_secret(token)))
-    return Principal(role=user.role, name=user.name) if user else None
+    if user is None or user.revoked_at is not None:
+        return None
+    if user.expires_at is not None and user.expires_at <= utcnow():
+        return None
+    return Principal(role=user.role, name=user.name)
 
 
 def get_principal(
@@ -55,12 +59,17 @@ def get_principal(
     if bearer is not None:
         person = person_for_token(session, bearer.credentials)
         if person is None:
-            raise Unauthorized("the bearer token is not known; ask an administrator for a token")
+            raise Unauthorized(
+                "the bearer token is not known, expired or revoked; ask an administrator for a"
+                " new one (depot user rotate NAME)"
+            )
         return person
     if device_key:
         device = session.scalar(select(Device).where(Device.key_hash == hash_secret(device_key)))
         if device is None:
             raise Unauthorized("the X-Device-Key is not known; register the device to get a key")
+        if device.decommissioned_at is not None:
+            raise Unauthorized(f"device {device.id} is decommissioned; its events are refused")
         return Principal(role="device", name=device.id, device=device)
     raise Unauthorized("credentials required: 'Authorization: Bearer <token>' or 'X-Device-Key'")
 

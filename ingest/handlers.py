@@ -1,12 +1,14 @@
 """Routing of stored raw events to the features that derive state from them.
 
-Features register a handler per event kind (``@handles("train_arrived")``); ingestion calls them
-after the raw event row is stored, and ``depot replay`` calls them again to rebuild derived tables.
+Ingest knows the features only through a handler table: which handlers derive state from
+which event model. The application builds that table explicitly (``service/features.py``) and
+installs it once at start-up (`install`); ingestion runs the handlers after the raw event row
+is stored, and ``depot replay`` runs them again to rebuild derived tables.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from datetime import timedelta
 from typing import Any
@@ -15,6 +17,7 @@ from sqlalchemy.orm import Session
 
 from core.models import Device
 from ingest.models import RawEvent
+from ingest.schemas import ALL_EVENT_MODELS, EventBase, kind_of
 
 
 @dataclass(frozen=True)
@@ -29,17 +32,29 @@ class Derivation:
 
 
 Handler = Callable[[Derivation], dict[str, Any] | None]
+HandlerTable = Mapping[type[EventBase], Sequence[Handler]]
 LAST_SEEN_GRANULARITY = timedelta(seconds=5)
-HANDLERS: dict[str, list[Handler]] = {}
+# The installed table, indexed by kind (filled by `install`; empty means liveness only).
+HANDLERS: dict[str, tuple[Handler, ...]] = {}
 
 
-def handles(*kinds: str) -> Callable[[Handler], Handler]:
-    def register(handler: Handler) -> Handler:
-        for kind in kinds:
-            HANDLERS.setdefault(kind, []).append(handler)
-        return handler
+def install(table: HandlerTable) -> None:
+    """Install the application's handler table; every event model must have an entry.
 
-    return register
+    An entry may be empty (the event only proves the device alive). Raises ValueError when a
+    kind is missing or unknown, so a new event kind cannot be accepted and then ignored.
+    """
+    missing = [kind_of(m) for m in ALL_EVENT_MODELS if m not in table]
+    unknown = [model.__name__ for model in table if model not in ALL_EVENT_MODELS]
+    if missing or unknown:
+        raise ValueError(f"handler table: missing kinds {missing}, unknown models {unknown}")
+    HANDLERS.clear()
+    HANDLERS.update({kind_of(model): tuple(handlers) for model, handlers in table.items()})
+
+
+def has_handlers(kind: str) -> bool:
+    """Whether any feature derives state from events of ``kind`` (else: liveness only)."""
+    return bool(HANDLERS.get(kind))
 
 
 def derive(derivation: Derivation) -> dict[str, Any]:

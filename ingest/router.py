@@ -21,7 +21,7 @@ from core.errors import (
 )
 from core.settings import get_settings
 from ingest import service
-from ingest.schemas import EventBatch
+from ingest.schemas import BatchResult, EventAck, EventBatch
 from ingest.snapshots import check_image, store_image
 
 router = APIRouter(tags=["devices"])
@@ -72,8 +72,11 @@ def _json(data: bytes) -> Any:
     "/events",
     openapi_extra=EVENT_BODY_DOC,
     responses={
-        201: {"description": "a new event, stored and committed"},
-        200: {"description": "a retry of a stored event (original result), or batch results"},
+        201: {"model": EventAck, "description": "a new event, stored and committed"},
+        200: {
+            "model": EventAck | BatchResult,
+            "description": "a retry of a stored event (original result), or batch results",
+        },
         409: {"description": "event_id reused with a different body"},
         422: {"description": "invalid event"},
     },
@@ -107,7 +110,12 @@ async def post_events(
 
 @router.post(
     "/snapshots",
-    responses={201: {"description": "stored"}, 200: {"description": "retry"}, 413: {}, 422: {}},
+    responses={
+        201: {"model": EventAck, "description": "stored"},
+        200: {"model": EventAck, "description": "a retry (original result)"},
+        413: {},
+        422: {},
+    },
 )
 async def post_snapshot(
     request: Request, session: DbSession, principal: CurrentDevicePrincipal

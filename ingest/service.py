@@ -15,7 +15,7 @@ from sqlalchemy.orm import Session
 
 from core.errors import Conflict, Forbidden, Unprocessable, validation_errors
 from core.models import Device, Section
-from ingest.handlers import HANDLERS, Derivation, derive
+from ingest.handlers import Derivation, derive, has_handlers
 from ingest.models import RawEvent
 from ingest.schemas import ALLOWED_KINDS, EVENT_ADAPTER, EVENT_KINDS, TailSnapshot
 
@@ -118,7 +118,7 @@ def store_event(
             )
         return 200, existing.result
     derived = run_derivation(session, raw, event, device)
-    if HANDLERS.get(event.kind):
+    if has_handlers(event.kind):
         raw.result = {"event_id": event.event_id, "status": "created", **derived}
     session.flush()
     return 201, raw.result
@@ -129,7 +129,7 @@ def run_derivation(
 ) -> dict[str, Any]:
     """Derive state from a stored event; a failing derivation never loses the raw event."""
     derivation = Derivation(session, raw, event, device, replaying)
-    if not HANDLERS.get(raw.kind):
+    if not has_handlers(raw.kind):
         return derive(derivation)  # liveness only: nothing that can fail half-way
     try:
         with session.begin_nested():
@@ -192,7 +192,7 @@ def _raw_values(
     device: Device, event: Any, body: dict[str, Any], transport: str = "http"
 ) -> dict[str, Any]:
     # Events no feature derives from answer just "created": store that answer with the row.
-    derived = bool(HANDLERS.get(event.kind))
+    derived = has_handlers(event.kind)
     return {
         "device_id": device.id,
         "event_id": event.event_id,
@@ -248,7 +248,7 @@ def accept_batch(
                 continue
         else:
             derived = run_derivation(session, raw, event, device)
-            if HANDLERS.get(event.kind):
+            if has_handlers(event.kind):
                 raw.result = {"event_id": event.event_id, "status": "created", **derived}
             status, result = 201, raw.result
         results[index] = {

@@ -20,6 +20,7 @@ from service.fleet.router import router as fleet_router
 from service.fleet.schedule import lifespan as fleet_lifespan
 from service.health import router as health_router
 from service.review.router import router as review_router
+from service.setup.credentials_router import router as credentials_router
 from service.setup.router import router as setup_router
 from service.trains.router import router as trains_router
 
@@ -93,7 +94,7 @@ def create_app() -> FastAPI:
     logging.basicConfig(
         level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
     )
-    assert features.LOADED
+    features.install()
     app = FastAPI(
         title="depot",
         version="0.1.0",
@@ -104,6 +105,7 @@ def create_app() -> FastAPI:
     install_error_handlers(app)
     app.include_router(health_router)
     app.include_router(setup_router, prefix=API)
+    app.include_router(credentials_router, prefix=API)
     app.include_router(ingest_router, prefix=API)
     app.include_router(event_log_router, prefix=API)
     app.include_router(clearance_router, prefix=API)

@@ -1,7 +1,7 @@
 """Every table, imported in one place so that Alembic and replay see the whole schema."""
 
 from core.database import Base
-from core.models import Car, Device, Section, Station, User
+from core.models import Car, CredentialChange, Device, Section, Station, User
 from ingest.models import RawEvent, Snapshot
 from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run, WheelMarking
 from service.fleet.models import Forecast, MaintenanceOverride, Measurement, Parameter
@@ -14,6 +14,7 @@ __all__ = [
     "AxleReading",
     "Car",
     "CarPassage",
+    "CredentialChange",
     "Device",
     "Forecast",
     "MaintenanceOverride",

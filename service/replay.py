@@ -15,11 +15,18 @@ from ingest.handlers import Derivation, derive
 from ingest.models import RawEvent, Snapshot
 from ingest.schemas import EVENT_ADAPTER, TailSnapshot
 from service.clearance import service as clearance
-from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run, WheelMarking
+from service.clearance.models import (
+    AuditRecord,
+    AxleReading,
+    CarPassage,
+    EotReport,
+    Run,
+    WheelMarking,
+)
 from service.fleet.models import Measurement
 from service.trains.models import TrainPosition
 
-DERIVED = (Run, CarPassage, AxleReading, WheelMarking, Snapshot, TrainPosition)
+DERIVED = (Run, CarPassage, AxleReading, EotReport, WheelMarking, Snapshot, TrainPosition)
 
 
 def _parse(raw: RawEvent) -> Any:
@@ -65,6 +72,8 @@ def replay(session: Session, *, progress: Any = None) -> dict[str, int]:
             counts["events"] += 1
         else:
             record = session.get_one(AuditRecord, ident)
+            if record.actor_role == "system":
+                continue  # written by the derivation itself (a sweep's clearance), not an action
             who = Principal(role=record.actor_role, name=record.actor)
             try:
                 with session.begin_nested():

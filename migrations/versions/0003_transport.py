@@ -1,7 +1,7 @@
 """How each raw event arrived: ``raw_events.transport`` (``http``, ``mqtt`` or ``nats``).
 
 Revision ID: 0003_transport
-Revises: 0002
+Revises: 0003_eot_sweep (re-chained after merging main; written against 0002)
 Create Date: 2026-11-24
 
 Events stored before this migration all came over HTTP, the only transport there was.
@@ -15,7 +15,7 @@ import sqlalchemy as sa
 from alembic import op
 
 revision: str = "0003_transport"
-down_revision: str | None = "0002"
+down_revision: str | None = "0003_eot_sweep"
 branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
 

@@ -47,6 +47,10 @@ def run_out(session: Session, run: Run) -> dict[str, Any]:
         "to_station": run.to_station,
         "departed_at": _iso(run.departed_at),
         "arrived_at": _iso(run.arrived_at),
+        "sweep": run.sweep,
+        "sweep_of": run.sweep_of,
+        "cleared_by": run.cleared_by,
+        "eot_unit": run.eot_unit,
         "evidence": run.evidence,
         "decision": None
         if run.verdict is None and run.status != "conflict"

@@ -37,20 +37,23 @@ class ProgressBar:
 
 def _import(args: argparse.Namespace) -> int:
     from service.fleet.importing import import_tests, parse_tests
+    from service.fleet.rules import registered
 
     path = Path(args.file)
     if not path.is_file():
         return fail(f"{path} does not exist or is not a file; give the path of a CSV file")
     try:
-        with path.open(newline="", encoding="utf-8-sig") as stream:
-            tests = parse_tests(stream)
         with get_sessionmaker().begin() as session:
+            with path.open(newline="", encoding="utf-8-sig") as stream:
+                tests = parse_tests(stream, registered(session))
             count, rows = import_tests(session, tests)
     except UnicodeDecodeError:
         return fail(f"{path} is not UTF-8 text; export the CSV as UTF-8")
     except DepotError as exc:
         return fail(f"{path}: {exc.detail}")
-    print(f"imported {count} tests ({rows} measurements) from {path}")
+    skipped = len(tests) - count
+    again = f"; {skipped} already stored, skipped" if skipped else ""
+    print(f"imported {count} tests ({rows} measurements) from {path}{again}")
     return 0
 
 

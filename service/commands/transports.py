@@ -10,7 +10,6 @@ from typing import Any
 
 from core.database import get_sessionmaker
 from core.settings import get_settings
-from service import features
 from service.commands._common import fail
 
 
@@ -21,7 +20,8 @@ def _logging() -> None:
 
 
 def _mqtt(args: argparse.Namespace) -> int:
-    from transports.mqtt import Bridge, MqttConfig, broker_address  # paho only when bridging
+    from service import features  # imported when used: every feature, paho
+    from transports.mqtt import Bridge, MqttConfig, broker_address
 
     settings = get_settings()
     url = args.broker or settings.mqtt_url
@@ -37,13 +37,14 @@ def _mqtt(args: argparse.Namespace) -> int:
         batch=settings.transport_batch,
         max_bytes=settings.max_body_bytes,
     )
-    assert features.LOADED  # the same handler table as the HTTP app
+    features.install()  # the same handler table as the HTTP app
     _logging()
     Bridge(get_sessionmaker(), config).serve()
     return 0
 
 
 def _consume(args: argparse.Namespace) -> int:
+    from service import features
     from transports.jetstream import ConsumeConfig, Consumer, StreamNames
 
     settings = get_settings()
@@ -59,7 +60,7 @@ def _consume(args: argparse.Namespace) -> int:
         batch=settings.transport_batch,
         max_bytes=settings.max_body_bytes,
     )
-    assert features.LOADED
+    features.install()
     _logging()
     asyncio.run(Consumer(get_sessionmaker(), config).run())
     return 0

@@ -88,3 +88,7 @@ class Parameter(Base):
     tolerance: Mapped[float] = mapped_column(Float)
     unit: Mapped[str] = mapped_column(String(16), default="")
     description: Mapped[str] = mapped_column(Text, default="")
+    # Values outside [plausible_lower, plausible_upper] are refused (service/fleet/rules.py);
+    # unset, the range follows from the band.
+    plausible_lower: Mapped[float | None] = mapped_column(Float, nullable=True)
+    plausible_upper: Mapped[float | None] = mapped_column(Float, nullable=True)

@@ -24,14 +24,25 @@ class MeasurementIn(StrictModel):
     values: MeasuredValues
 
 
+# No railway quantity comes near this in any unit; beyond it the band arithmetic overflows.
+MAX_MAGNITUDE = 1e15
+
+
 class ParameterIn(StrictModel):
     """A measured parameter and its tolerance band ``nominal ± tolerance``."""
 
     name: ParameterName
-    nominal: Annotated[float, Field(allow_inf_nan=False)]
-    tolerance: Annotated[float, Field(gt=0, allow_inf_nan=False)]
+    # Bounded so that the band's edges nominal ± tolerance stay finite numbers.
+    nominal: Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)]
+    tolerance: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)]
     unit: Annotated[str, Field(max_length=16)] = ""
     description: Annotated[str, Field(max_length=2000)] = ""
+    plausible_lower: (
+        Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None
+    ) = Field(default=None, description="values below are refused (default: the band's)")
+    plausible_upper: (
+        Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None
+    ) = Field(default=None, description="values above are refused (default: the band's)")
 
 
 class ForecastRunIn(StrictModel):

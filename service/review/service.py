@@ -21,6 +21,7 @@ STATE_WORDS = {
     "review": "needs review",
     "alarm": "ALARM",
     "blocked": "blocked",
+    "awaiting_sweep": "awaiting sweep",
 }
 
 

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from ingest.handlers import Derivation, handles
+from ingest.handlers import Derivation
 from service.trains import service
 
 
-@handles("motion_sample")
-def _motion(d: Derivation) -> dict[str, Any]:
+def motion_sample(d: Derivation) -> dict[str, Any]:
     sample = d.event.model_dump(exclude_none=True, exclude={"event_id", "occurred_at", "kind"})
     try:
         state = service.feed(d.session, d.event.train, sample, d.event.occurred_at)
