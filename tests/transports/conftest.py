@@ -1,9 +1,10 @@
-"""One line on one PostgreSQL database: two ``depot serve``, one ``depot mqtt``, two
+"""One line (shared by the package's tests, which run in file order) on one PostgreSQL database: two ``depot serve``, one ``depot mqtt``, two
 ``depot consume``, the 50 simulated devices, and device clients of both brokers."""
 
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,7 +43,7 @@ class Line:
     nats: NatsDevices
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="package")
 def line(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Line]:
     names = RunNames()
     data_dir: Path = tmp_path_factory.mktemp("transports")
@@ -75,12 +76,14 @@ def line(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Line]:
                 answers, mqtt_devices, nats_devices,
             )  # fmt: skip
         finally:
-            for process in (*consumers, the_bridge):
-                process.stop()
-            for server in servers:
-                server.stop()
+            stops = [p.stop for p in (*consumers, the_bridge)] + [s.stop for s in servers]
+            threads = [threading.Thread(target=stop) for stop in stops]
+            for thread in threads:
+                thread.start()
+            for thread in threads:
+                thread.join()
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="package")
 def payloads() -> Payloads:
     return Payloads()

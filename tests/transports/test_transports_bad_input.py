@@ -33,7 +33,7 @@ def _ask(line: Line, transport: str, key: str | None, payload: bytes) -> dict[st
     until(
         lambda: len([b for d, b in line.answers.bodies if d == SENDER]) > before,
         within=30,
-        what=f"no answer over {transport}",
+        what=f"an answer over {transport}",
     )
     return [b for d, b in line.answers.bodies if d == SENDER][before]
 

@@ -35,8 +35,8 @@ from tests.reliability.relkit import run_depot
 from tests.transports.conftest import Line
 from tests.transports.tkit import Key, until
 
-ROUNDS = 5
-PHASE_WITHIN_S = 30.0  # bound on one phase, kills and restarts included
+ROUNDS = 4  # kills in rounds 1, 2 and 3
+PHASE_WITHIN_S = 90.0  # bound on one phase, kills and restarts included
 EVIDENCE = 1  # the phase with the most events (readers, heartbeats)
 
 

@@ -237,6 +237,15 @@ class NatsDevices:
     def consumer_info(self, stream: str, consumer: str) -> Any:
         return self.call(self.nc.jetstream().consumer_info(stream, consumer))
 
+    def stream_messages(self, stream: str) -> int:
+        async def count() -> int:
+            try:
+                return int((await self.nc.jetstream().stream_info(stream)).state.messages)
+            except NotFoundError:
+                return 0
+
+        return int(self.call(count()))
+
     def dead_letters(self, stream: str, subject: str) -> list[Any]:
         async def fetch() -> list[Any]:
             js = self.nc.jetstream()
@@ -301,4 +310,4 @@ def until(condition: Callable[[], bool], *, within: float, what: str) -> None:
         if condition():
             return
         time.sleep(0.1)
-    raise AssertionError(f"{what} within {within} s")
+    raise AssertionError(f"waited {within} s in vain for: {what}")
