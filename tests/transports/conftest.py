@@ -1,5 +1,6 @@
-"""One line (shared by the package's tests, which run in file order) on one PostgreSQL database: two ``depot serve``, one ``depot mqtt``, two
-``depot consume``, the 50 simulated devices, and device clients of both brokers."""
+"""One line on one PostgreSQL database, shared by the package's tests (in file order): two
+``depot serve``, one ``depot mqtt``, two ``depot consume``, the 50 simulated devices, and
+device clients of both brokers."""
 
 from __future__ import annotations
 
