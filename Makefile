@@ -4,7 +4,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 PURE := identification tail_check maintenance motion
-TYPED := core ingest service $(PURE) bench
+TYPED := core ingest service transports $(PURE) bench
 
 .PHONY: run test lint bench soak install clean format
 

@@ -38,8 +38,9 @@ def _tile(scene: SceneB, seed: int) -> npt.NDArray[np.uint8]:
     what = "DISC" if scene.disc else f"no disc: {scene.negative_kind}"
     label = f"{seed} {scene.condition} {what} {scene.image.shape[1]}x{scene.image.shape[0]}"
     cv2.rectangle(tile, (0, 0), (TILE[0], 18), (0, 0, 0), -1)
-    cv2.putText(tile, label, (4, 13), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (255, 255, 255), 1,
-                cv2.LINE_AA)
+    cv2.putText(
+        tile, label, (4, 13), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (255, 255, 255), 1, cv2.LINE_AA
+    )
     return tile
 
 

@@ -42,6 +42,19 @@ class Settings(BaseSettings):
     group_commit_max: int = Field(default=64, ge=1, le=1000)
     host: str = "127.0.0.1"
     port: int = 8000
+    # Transports (docs/DEPLOYMENT.md): the MQTT bridge and the JetStream consumer.
+    mqtt_url: str = "mqtt://127.0.0.1:1883"
+    mqtt_prefix: str = Field(default="depot/v1", pattern=r"^[^#+$/]([^#+]*[^#+/])?$")
+    mqtt_client_id: str | None = Field(default=None, description="default: depot- + host name")
+    mqtt_inflight: int = Field(default=500, ge=1, le=65535, description="MQTT 5 receive maximum")
+    nats_url: str = "nats://127.0.0.1:4222"
+    nats_prefix: str = Field(default="depot", pattern=r"^[A-Za-z0-9_-]+$")
+    nats_replicas: int = Field(default=1, ge=1, le=5)
+    nats_ack_wait_s: float = Field(default=30.0, gt=0)
+    nats_max_deliver: int = Field(default=10, ge=1)
+    transport_batch: int = Field(
+        default=200, ge=1, le=1000, description="messages committed together, at most"
+    )
 
     @model_validator(mode="after")
     def _refuse_unsafe_production(self) -> Settings:

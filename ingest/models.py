@@ -33,6 +33,8 @@ class RawEvent(Base):
     # What the client was told; written in the same transaction as the row, never changed after.
     result: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
     derive_error: Mapped[str | None] = mapped_column(Text, nullable=True)
+    # How the event reached the service: "http", "mqtt" or "nats" (docs/DEPLOYMENT.md).
+    transport: Mapped[str] = mapped_column(String(8), default="http", server_default="http")
 
 
 class Snapshot(Base):

@@ -10,6 +10,7 @@ from fastapi.openapi.utils import get_openapi
 
 from core.errors import install_error_handlers
 from core.settings import get_settings
+from ingest.event_log import router as event_log_router
 from ingest.router import router as ingest_router
 from ingest.schemas import EVENT_ADAPTER, EventBatch
 from service import features
@@ -106,6 +107,7 @@ def create_app() -> FastAPI:
     app.include_router(setup_router, prefix=API)
     app.include_router(credentials_router, prefix=API)
     app.include_router(ingest_router, prefix=API)
+    app.include_router(event_log_router, prefix=API)
     app.include_router(clearance_router, prefix=API)
     app.include_router(review_router)
     app.include_router(fleet_router, prefix=API)

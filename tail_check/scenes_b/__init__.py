@@ -104,8 +104,13 @@ def render_scene(
     box = None if mask is None else _bbox(mask)
     if layout.disc and box is None:  # cannot happen with the aim jitter; fail loudly if it does
         raise RuntimeError(f"seed {seed}: the disc fell outside the image")
-    return SceneB(image=image, disc=layout.disc, bbox=box, condition=layout.condition,
-                  negative_kind=layout.negative_kind)
+    return SceneB(
+        image=image,
+        disc=layout.disc,
+        bbox=box,
+        condition=layout.condition,
+        negative_kind=layout.negative_kind,
+    )
 
 
 def iter_scenes(n: int, *, seed: int) -> Iterator[SceneB]:

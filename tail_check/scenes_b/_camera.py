@@ -161,8 +161,9 @@ class Canvas:
         self.depth = np.full((self.height, self.width), np.inf, np.float32)
         self.shade = np.ones((self.height, self.width), np.float32)
 
-    def paint(self, mask: FloatMap, colour: FloatImage | BGR, depth: float | FloatMap,
-              shade: float = 1.0) -> None:
+    def paint(
+        self, mask: FloatMap, colour: FloatImage | BGR, depth: float | FloatMap, shade: float = 1.0
+    ) -> None:
         """Alpha-blend ``colour`` where ``mask`` (0..1) is set; write its depth.
 
         ``colour`` and ``depth`` are either per-pixel (full image) or constant.
@@ -178,8 +179,14 @@ class Canvas:
         )
         self._blend(box, mask[box], col[box] if col.ndim == 3 else col, dep, shade)
 
-    def _blend(self, box: tuple[slice, slice], alpha: FloatMap, col: npt.NDArray[np.float32],
-               depth: float | FloatMap, shade: float) -> None:
+    def _blend(
+        self,
+        box: tuple[slice, slice],
+        alpha: FloatMap,
+        col: npt.NDArray[np.float32],
+        depth: float | FloatMap,
+        shade: float,
+    ) -> None:
         """Blend inside ``box``; ``alpha`` (and per-pixel ``col``/``depth``) are box-sized."""
         region = self.albedo[box]
         region[:] = region * (1.0 - alpha[..., None]) + col * alpha[..., None]
@@ -188,8 +195,9 @@ class Canvas:
         self.depth[box][solid] = depth if isinstance(depth, float) else depth[solid]
         self.shade[box][solid] = shade
 
-    def paint_polygon(self, poly: Points | None, colour: BGR, depth: float,
-                      shade: float = 1.0, alpha: float = 1.0) -> None:
+    def paint_polygon(
+        self, poly: Points | None, colour: BGR, depth: float, shade: float = 1.0, alpha: float = 1.0
+    ) -> None:
         """Fill an image polygon (anti-aliased) with a flat colour."""
         if poly is None:
             return
@@ -206,8 +214,14 @@ class Canvas:
         cover = mask.astype(np.float32) * np.float32(alpha / 255.0)
         self._blend(box, cover, np.asarray(colour, np.float32), depth, shade)
 
-    def paste(self, texture: FloatImage, alpha: FloatMap, homography: Points,
-              depth: float | FloatMap, shade: float = 1.0) -> FloatMap:
+    def paste(
+        self,
+        texture: FloatImage,
+        alpha: FloatMap,
+        homography: Points,
+        depth: float | FloatMap,
+        shade: float = 1.0,
+    ) -> FloatMap:
         """Warp a texture with alpha into the image; returns the warped alpha."""
         size = (self.width, self.height)
         warped = cv2.warpPerspective(texture, homography, size, flags=cv2.INTER_LINEAR)

@@ -72,10 +72,16 @@ def choose_car(rng: Rng, *, red_body: bool) -> CarSpec:
     if shape == "flat" and rng.random() < 0.6:
         container = paint_colour(rng, CAR_PAINTS[int(rng.integers(len(CAR_PAINTS)))])
     return CarSpec(
-        shape=shape, paint=paint, colour=colour, beam_colour=beam,
+        shape=shape,
+        paint=paint,
+        colour=colour,
+        beam_colour=beam,
         width=3.0 if shape == "tank" else uniform(rng, (3.05, 3.25)),
-        length=uniform(rng, (12.0, 19.0)), top=BODY_TOP[shape] * uniform(rng, (0.96, 1.04)),
-        container=container, buffers=bool(rng.random() < 0.2), ribs=int(rng.integers(3, 9)),
+        length=uniform(rng, (12.0, 19.0)),
+        top=BODY_TOP[shape] * uniform(rng, (0.96, 1.04)),
+        container=container,
+        buffers=bool(rng.random() < 0.2),
+        ribs=int(rng.integers(3, 9)),
     )
 
 
@@ -88,8 +94,12 @@ def rust(face: Face, rng: Rng, amount: float) -> None:
     streaks = cv2.resize(rng.standard_normal((2, max(2, w // 6))).astype(np.float32), (w, h))
     level = big + 0.3 * streaks
     cover = np.clip((level - (1.6 - amount)) * 2.0, 0.0, 0.85)[..., None]
-    colour = np.asarray(hsv_to_bgr(uniform(rng, (8.0, 16.0)), uniform(rng, (150.0, 220.0)),
-                                   uniform(rng, (60.0, 120.0))), np.float32)
+    colour = np.asarray(
+        hsv_to_bgr(
+            uniform(rng, (8.0, 16.0)), uniform(rng, (150.0, 220.0)), uniform(rng, (60.0, 120.0))
+        ),
+        np.float32,
+    )
     face.texture[:] = face.texture * (1.0 - cover) + colour * cover
 
 
@@ -189,8 +199,15 @@ def draw_side(face: Face, car: CarSpec, rng: Rng) -> None:
             face.line((float(u), BEAM_TOP), (float(u), car.top), rib, 0.09)
         if car.shape == "hopper":
             for centre in (length * 0.35, length * 0.65):
-                face.poly([(centre - 1.6, BEAM_TOP), (centre + 1.6, BEAM_TOP),
-                           (centre + 0.5, 0.6), (centre - 0.5, 0.6)], _scaled(col, 0.8))
+                face.poly(
+                    [
+                        (centre - 1.6, BEAM_TOP),
+                        (centre + 1.6, BEAM_TOP),
+                        (centre + 0.5, 0.6),
+                        (centre - 0.5, 0.6),
+                    ],
+                    _scaled(col, 0.8),
+                )
     if car.paint == "rusty" or rng.random() < RANGES.p_rust:
         rust(face, rng, uniform(rng, (0.1, 0.8)))
     face.grime(rng, uniform(rng, (0.05, 0.3)), 0.6)

@@ -41,8 +41,11 @@ def choose_look(rng: Rng, *, snowy: bool, night: bool) -> DiscLook:
     val = uniform(rng, (120.0, 235.0))
     field = hsv_to_bgr(hue, sat, val)
     # the prismatic reflector reads brighter and a little less saturated than the paint
-    reflector = hsv_to_bgr(hue + uniform(rng, (-3.0, 3.0)), sat * uniform(rng, (0.8, 0.95)),
-                           min(255.0, val * uniform(rng, (1.15, 1.4)) + 20.0))
+    reflector = hsv_to_bgr(
+        hue + uniform(rng, (-3.0, 3.0)),
+        sat * uniform(rng, (0.8, 0.95)),
+        min(255.0, val * uniform(rng, (1.15, 1.4)) + 20.0),
+    )
     rim: BGR | None = None
     draw = rng.random()
     if draw < RANGES.p_white_rim:
@@ -53,9 +56,14 @@ def choose_look(rng: Rng, *, snowy: bool, night: bool) -> DiscLook:
     if snowy and rng.random() < RANGES.p_snow_clump:
         clumps = int(rng.integers(1, 4))
     return DiscLook(
-        field=field, reflector=reflector, rim=rim, rim_width=uniform(rng, (0.06, 0.14)),
-        reflector_radius=uniform(rng, (0.22, 0.45)), dirt=uniform(rng, (0.0, 0.35)),
-        snow_clumps=clumps, lit=night and rng.random() < 0.8,
+        field=field,
+        reflector=reflector,
+        rim=rim,
+        rim_width=uniform(rng, (0.06, 0.14)),
+        reflector_radius=uniform(rng, (0.22, 0.45)),
+        dirt=uniform(rng, (0.0, 0.35)),
+        snow_clumps=clumps,
+        lit=night and rng.random() < 0.8,
     )
 
 
@@ -126,8 +134,9 @@ def _snow_clump(tex: FloatImage, alpha: FloatMap, rng: Rng, radius: float) -> No
     for _ in range(5):
         ox, oy = rng.normal(0.0, radius * 0.12, 2)
         r = radius * uniform(rng, (0.1, 0.25))
-        cv2.circle(mask, (int((cx + ox) * 8), int((cy + oy) * 8)), int(r * 8), 1.0, -1,
-                   cv2.LINE_AA, 3)
+        cv2.circle(
+            mask, (int((cx + ox) * 8), int((cy + oy) * 8)), int(r * 8), 1.0, -1, cv2.LINE_AA, 3
+        )
     white = np.float32(uniform(rng, (200.0, 245.0)))
     tex[:] = tex * (1.0 - mask[..., None]) + white * mask[..., None]
     alpha[:] = np.maximum(alpha, mask)

@@ -52,8 +52,9 @@ class Face:
         """Line thickness in whole texture pixels (cv2 does not shift it)."""
         return max(1, int(round(metres * self.ppm)))
 
-    def rect(self, u0: float, y0: float, u1: float, y1: float, colour: BGR,
-             alpha: float = 1.0) -> None:
+    def rect(
+        self, u0: float, y0: float, u1: float, y1: float, colour: BGR, alpha: float = 1.0
+    ) -> None:
         """Filled axis-aligned rectangle between two plane corners."""
         self.poly([(u0, y0), (u1, y0), (u1, y1), (u0, y1)], colour, alpha)
 
@@ -63,23 +64,45 @@ class Face:
         cv2.fillPoly(self.texture, [pts], colour, cv2.LINE_AA, SHIFT)
         cv2.fillPoly(self.alpha, [pts], alpha, cv2.LINE_AA, SHIFT)
 
-    def ellipse(self, u: float, y: float, ru: float, ry: float, colour: BGR,
-                alpha: float = 1.0, thickness_m: float = 0.0) -> None:
+    def ellipse(
+        self,
+        u: float,
+        y: float,
+        ru: float,
+        ry: float,
+        colour: BGR,
+        alpha: float = 1.0,
+        thickness_m: float = 0.0,
+    ) -> None:
         """Filled (or outlined when ``thickness_m > 0``) axis-aligned ellipse."""
         th = -1 if thickness_m <= 0 else self.thick(thickness_m)
         axes = (self.length(ru), self.length(ry))
         cv2.ellipse(self.texture, self.px(u, y), axes, 0, 0, 360, colour, th, cv2.LINE_AA, SHIFT)
         cv2.ellipse(self.alpha, self.px(u, y), axes, 0, 0, 360, alpha, th, cv2.LINE_AA, SHIFT)
 
-    def line(self, a: tuple[float, float], b: tuple[float, float], colour: BGR,
-             width_m: float, alpha: float = 1.0) -> None:
+    def line(
+        self,
+        a: tuple[float, float],
+        b: tuple[float, float],
+        colour: BGR,
+        width_m: float,
+        alpha: float = 1.0,
+    ) -> None:
         """Straight bar of ``width_m`` metres."""
         th = self.thick(width_m)
         cv2.line(self.texture, self.px(*a), self.px(*b), colour, th, cv2.LINE_AA, SHIFT)
         cv2.line(self.alpha, self.px(*a), self.px(*b), alpha, th, cv2.LINE_AA, SHIFT)
 
-    def text(self, u: float, y: float, label: str, height_m: float, colour: BGR,
-             font: int = cv2.FONT_HERSHEY_SIMPLEX, weight: float = 0.14) -> None:
+    def text(
+        self,
+        u: float,
+        y: float,
+        label: str,
+        height_m: float,
+        colour: BGR,
+        font: int = cv2.FONT_HERSHEY_SIMPLEX,
+        weight: float = 0.14,
+    ) -> None:
         """Painted text with its baseline-left at plane point (u, y)."""
         scale = height_m * self.ppm / 22.0  # Hershey capitals are ~22 px at scale 1
         th = max(1, int(round(height_m * self.ppm * weight)))
@@ -100,8 +123,13 @@ class Face:
         region[:] = region * (1.0 - cover[..., None]) + paint * cover[..., None]
         self.alpha[ya:yb, xa:xb] = np.maximum(self.alpha[ya:yb, xa:xb], cover)
 
-    def text_width(self, label: str, height_m: float,
-                   font: int = cv2.FONT_HERSHEY_SIMPLEX, weight: float = 0.14) -> float:
+    def text_width(
+        self,
+        label: str,
+        height_m: float,
+        font: int = cv2.FONT_HERSHEY_SIMPLEX,
+        weight: float = 0.14,
+    ) -> float:
         """Width of ``label`` in metres when painted ``height_m`` high."""
         scale = height_m * self.ppm / 22.0
         th = max(1, int(round(height_m * self.ppm * weight)))

@@ -70,7 +70,12 @@ def _sleeper_cover(world_z: FloatMap, footprint: FloatMap) -> FloatMap:
 
 
 def _track_layer(
-    albedo: FloatImage, wx: FloatMap, wz: FloatMap, fp: FloatMap, centre: float, rng: Rng,
+    albedo: FloatImage,
+    wx: FloatMap,
+    wz: FloatMap,
+    fp: FloatMap,
+    centre: float,
+    rng: Rng,
     concrete: bool,
 ) -> FloatImage:
     """Paint one track (sleepers then rails) centred at world X ``centre``."""

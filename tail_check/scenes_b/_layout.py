@@ -61,8 +61,9 @@ def _disc_fraction(rng: Rng, condition: str, kind: str | None) -> float:
     return float(np.exp(rng.uniform(np.log(low), np.log(high))))  # log-uniform: many small
 
 
-def _camera(rng: Rng, size: tuple[int, int], disc_pos: tuple[float, float, float],
-            r_frac: float, r_m: float) -> tuple[Camera, float]:
+def _camera(
+    rng: Rng, size: tuple[int, int], disc_pos: tuple[float, float, float], r_frac: float, r_m: float
+) -> tuple[Camera, float]:
     """Camera beside the track aimed near the disc; returns it and the end wall Z."""
     width, height = size
     focal = width / 2.0 / np.tan(np.deg2rad(uniform(rng, RANGES.fov_deg)) / 2.0)
@@ -74,11 +75,15 @@ def _camera(rng: Rng, size: tuple[int, int], disc_pos: tuple[float, float, float
     dist = float(np.sqrt(dx**2 + dy**2 + dz**2))
     focal = r_frac * height * dist / r_m  # keep the drawn disc radius
     half_w, half_h = dist * width / (2 * focal), dist * height / (2 * focal)
-    target = (disc_pos[0] + rng.uniform(-0.55, 0.55) * half_w,
-              disc_pos[1] + rng.uniform(-0.45, 0.45) * half_h, dz)
+    target = (
+        disc_pos[0] + rng.uniform(-0.55, 0.55) * half_w,
+        disc_pos[1] + rng.uniform(-0.45, 0.45) * half_h,
+        dz,
+    )
     end_z = dz + 0.12  # the disc hangs just in front of the end wall
-    cam = Camera.looking_at(width, height, focal, (cam_x, cam_y, 0.0),
-                            (target[0], target[1], end_z))
+    cam = Camera.looking_at(
+        width, height, focal, (cam_x, cam_y, 0.0), (target[0], target[1], end_z)
+    )
     return cam, end_z
 
 
@@ -96,8 +101,9 @@ def _car_for(rng: Rng, condition: str, kind: str | None, extras: tuple[str, ...]
     return car
 
 
-def choose_layout(rng: Rng, disc: bool | None, condition: str | None,
-                  size: tuple[int, int] | None) -> Layout:
+def choose_layout(
+    rng: Rng, disc: bool | None, condition: str | None, size: tuple[int, int] | None
+) -> Layout:
     """Draw every content choice of a scene (overrides replace, never skip, a draw)."""
     drawn_disc = bool(rng.random() < RANGES.p_disc)
     drawn_condition = CONDITIONS[int(rng.integers(len(CONDITIONS)))]
@@ -119,11 +125,21 @@ def choose_layout(rng: Rng, disc: bool | None, condition: str | None,
     r_frac = _disc_fraction(rng, cond, kind)
     camera, end_z = _camera(rng, (width, height), disc_pos, r_frac, r_m)
     return Layout(
-        width=width, height=height, condition=cond, disc=has_disc, negative_kind=kind,
-        extras=extras, car=car, camera=camera, end_z=end_z,
-        disc_pos=(disc_x, disc_y, end_z - 0.12), disc_radius=r_m,
-        disc_turn=(np.deg2rad(uniform(rng, RANGES.disc_yaw_deg)),
-                   np.deg2rad(uniform(rng, RANGES.disc_pitch_deg))),
+        width=width,
+        height=height,
+        condition=cond,
+        disc=has_disc,
+        negative_kind=kind,
+        extras=extras,
+        car=car,
+        camera=camera,
+        end_z=end_z,
+        disc_pos=(disc_x, disc_y, end_z - 0.12),
+        disc_radius=r_m,
+        disc_turn=(
+            np.deg2rad(uniform(rng, RANGES.disc_yaw_deg)),
+            np.deg2rad(uniform(rng, RANGES.disc_pitch_deg)),
+        ),
         background=BACKGROUNDS[int(rng.integers(len(BACKGROUNDS)))],
         pole_occlusion=bool(rng.random() < RANGES.p_pole_occlusion),
         stripe_beside_disc=bool(rng.random() < 0.2),

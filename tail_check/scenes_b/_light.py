@@ -43,10 +43,12 @@ def _verge(rng: Rng, snowy: bool) -> BGR:
     if snowy:
         return hsv_to_bgr(110.0, uniform(rng, (0.0, 20.0)), uniform(rng, (200.0, 240.0)))
     if rng.random() < 0.6:
-        return hsv_to_bgr(uniform(rng, (30.0, 50.0)), uniform(rng, (60.0, 150.0)),
-                          uniform(rng, (70.0, 140.0)))
-    return hsv_to_bgr(uniform(rng, (10.0, 25.0)), uniform(rng, (40.0, 110.0)),
-                      uniform(rng, (70.0, 130.0)))
+        return hsv_to_bgr(
+            uniform(rng, (30.0, 50.0)), uniform(rng, (60.0, 150.0)), uniform(rng, (70.0, 140.0))
+        )
+    return hsv_to_bgr(
+        uniform(rng, (10.0, 25.0)), uniform(rng, (40.0, 110.0)), uniform(rng, (70.0, 130.0))
+    )
 
 
 def choose_light(rng: Rng, condition: str) -> Light:
@@ -55,8 +57,14 @@ def choose_light(rng: Rng, condition: str) -> Light:
     snowy = condition == "snow" or (condition in ("fog", "overcast") and rng.random() < 0.2)
     base = {
         "daylight": ((205.0, 150.0, 90.0), (235.0, 215.0, 190.0), 1.0, 0.6, 3000.0, 0.0),
-        "overcast": ((grey, grey, grey - 8), (grey + 20, grey + 20, grey + 15), 0.8, 0.88,
-                     1500.0, 0.0),
+        "overcast": (
+            (grey, grey, grey - 8),
+            (grey + 20, grey + 20, grey + 15),
+            0.8,
+            0.88,
+            1500.0,
+            0.0,
+        ),
         "dusk": ((120.0, 70.0, 50.0), (110.0, 150.0, 215.0), 0.35, 0.8, 900.0, 0.25),
         "night": ((22.0, 12.0, 8.0), (40.0, 35.0, 35.0), 0.07, 0.9, 700.0, 1.0),
         "rain": ((grey - 40,) * 3, (grey - 15,) * 3, 0.6, 0.9, 300.0, 0.0),
@@ -71,15 +79,20 @@ def choose_light(rng: Rng, condition: str) -> Light:
         tint = (0.55, 0.8, 1.1) if rng.random() < 0.5 else (1.0, 0.95, 0.9)
     fog_col = tuple(float(c) * (0.35 if condition == "night" else 1.0) for c in bottom)
     return Light(
-        sky_top=top, sky_bottom=bottom, verge=_verge(rng, snowy),
-        tree=hsv_to_bgr(uniform(rng, (35.0, 75.0)), uniform(rng, (60.0, 160.0)),
-                        uniform(rng, (40.0, 100.0))),
-        ambient=ambient * uniform(rng, (0.8, 1.2)), tint=tint,
+        sky_top=top,
+        sky_bottom=bottom,
+        verge=_verge(rng, snowy),
+        tree=hsv_to_bgr(
+            uniform(rng, (35.0, 75.0)), uniform(rng, (60.0, 160.0)), uniform(rng, (40.0, 100.0))
+        ),
+        ambient=ambient * uniform(rng, (0.8, 1.2)),
+        tint=tint,
         side_shade=side * uniform(rng, (0.9, 1.1)) if rng.random() < 0.5 else 1.0 / side,
         visibility=vis * uniform(rng, (0.4, 1.6)),
         fog=(fog_col[0], fog_col[1], fog_col[2]),
         headlight=head * uniform(rng, (0.5, 1.5)) if head > 0 and rng.random() < 0.85 else 0.0,
-        precipitation=condition if condition in ("rain", "snow") else "none", snowy=snowy,
+        precipitation=condition if condition in ("rain", "snow") else "none",
+        snowy=snowy,
     )
 
 

@@ -23,8 +23,9 @@ FONTS = (cv2.FONT_HERSHEY_SIMPLEX, cv2.FONT_HERSHEY_DUPLEX, cv2.FONT_HERSHEY_TRI
 
 def red_paint(rng: Rng) -> BGR:
     """A red paint for lettering, stripes and logos (as saturated as a disc)."""
-    return hsv_to_bgr(uniform(rng, (172.0, 186.0)), uniform(rng, (160.0, 250.0)),
-                      uniform(rng, (130.0, 235.0)))
+    return hsv_to_bgr(
+        uniform(rng, (172.0, 186.0)), uniform(rng, (160.0, 250.0)), uniform(rng, (130.0, 235.0))
+    )
 
 
 def red_lettering(face: Face, car: CarSpec, rng: Rng, height_m: float, tail_u: float) -> None:
@@ -52,8 +53,15 @@ def red_stripe(face: Face, car: CarSpec, rng: Rng, y: float | None = None) -> No
     u0, u1 = face.u0, face.u0 + face.width_m
     if face.width_m > 4.0 and rng.random() < 0.3:
         mid = u0 + face.width_m * uniform(rng, (0.3, 0.7))
-        face.poly([(mid - 1.2, BEAM_TOP + 0.2), (mid, BEAM_TOP + 0.2), (mid + 1.8, car.top),
-                   (mid + 0.6, car.top)], colour)
+        face.poly(
+            [
+                (mid - 1.2, BEAM_TOP + 0.2),
+                (mid, BEAM_TOP + 0.2),
+                (mid + 1.8, car.top),
+                (mid + 0.6, car.top),
+            ],
+            colour,
+        )
     else:
         face.rect(u0, y, u1, y + band, colour)
 
@@ -72,8 +80,15 @@ def red_logo(face: Face, car: CarSpec, rng: Rng, size_m: float, tail_u: float) -
         face.line((u - size_m * 0.2, y), (u + size_m * 0.2, y), white, size_m * 0.08)
         return
     h = size_m * 0.6
-    face.poly([(u - size_m, y - h / 2), (u + size_m * 0.8, y - h / 2),
-               (u + size_m, y + h / 2), (u - size_m * 0.8, y + h / 2)], colour)
+    face.poly(
+        [
+            (u - size_m, y - h / 2),
+            (u + size_m * 0.8, y - h / 2),
+            (u + size_m, y + h / 2),
+            (u - size_m * 0.8, y + h / 2),
+        ],
+        colour,
+    )
     face.text(u - size_m * 0.6, y - h * 0.3, "PZD", h * 0.6, white, cv2.FONT_HERSHEY_DUPLEX)
 
 
@@ -94,8 +109,9 @@ def hand_wheel(face: Face, car: CarSpec, rng: Rng, side: float) -> None:
     face.ellipse(u, y, r * 0.18, r * 0.18, colour)
 
 
-def lamp_glow(canvas: Canvas, centre: tuple[float, float], radius: float, colour: BGR,
-              power: float) -> None:
+def lamp_glow(
+    canvas: Canvas, centre: tuple[float, float], radius: float, colour: BGR, power: float
+) -> None:
     """Add a lit lamp: a bright core and a soft halo to the emission buffer."""
     h, w = canvas.height, canvas.width
     reach = int(max(3.0, radius * 6.0))
@@ -130,17 +146,25 @@ def signal_light(canvas: Canvas, camera: Camera, rng: Rng, z_end: float) -> None
     z = uniform(rng, (max(6.0, z_end * 0.4), z_end * 1.8 + 15.0))
     height = uniform(rng, (2.5, 5.5))
     depth = max(camera.depth((x, height, z)), 1.0)
-    mast = np.asarray([(x - 0.08, 0.0, z), (x + 0.08, 0.0, z), (x + 0.08, height, z),
-                       (x - 0.08, height, z)])
+    mast = np.asarray(
+        [(x - 0.08, 0.0, z), (x + 0.08, 0.0, z), (x + 0.08, height, z), (x - 0.08, height, z)]
+    )
     canvas.paint_polygon(camera.project_polygon(mast), (60.0, 62.0, 65.0), depth)
-    head = np.asarray([(x - 0.2, height, z), (x + 0.2, height, z), (x + 0.2, height + 1.0, z),
-                       (x - 0.2, height + 1.0, z)])
+    head = np.asarray(
+        [
+            (x - 0.2, height, z),
+            (x + 0.2, height, z),
+            (x + 0.2, height + 1.0, z),
+            (x - 0.2, height + 1.0, z),
+        ]
+    )
     canvas.paint_polygon(camera.project_polygon(head), (18.0, 18.0, 20.0), depth)
     lamp = (x, height + 0.3 + 0.4 * float(rng.integers(2)), z - 0.05)
     u, v = camera.project(np.asarray([lamp]))[0]
     colour = hsv_to_bgr(uniform(rng, (174.0, 184.0)), uniform(rng, (170.0, 240.0)), 255.0)
-    lamp_glow(canvas, (float(u), float(v)), camera.focal * 0.07 / depth, colour,
-              uniform(rng, (0.8, 1.8)))
+    lamp_glow(
+        canvas, (float(u), float(v)), camera.focal * 0.07 / depth, colour, uniform(rng, (0.8, 1.8))
+    )
 
 
 def red_barrier(canvas: Canvas, camera: Camera, rng: Rng, z_end: float) -> None:
@@ -157,6 +181,7 @@ def red_barrier(canvas: Canvas, camera: Camera, rng: Rng, z_end: float) -> None:
         b = x0 + (x1 - x0) * (k + 1) / segments
         quad = np.asarray([(a, y, z), (b, y, z), (b, y + 0.12, z), (a, y + 0.12, z)])
         canvas.paint_polygon(camera.project_polygon(quad), red if k % 2 == 0 else white, depth)
-    post = np.asarray([(x0 - 0.15, 0.0, z), (x0 + 0.15, 0.0, z), (x0 + 0.15, y + 0.3, z),
-                       (x0 - 0.15, y + 0.3, z)])
+    post = np.asarray(
+        [(x0 - 0.15, 0.0, z), (x0 + 0.15, 0.0, z), (x0 + 0.15, y + 0.3, z), (x0 - 0.15, y + 0.3, z)]
+    )
     canvas.paint_polygon(camera.project_polygon(post), red, depth)

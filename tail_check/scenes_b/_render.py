@@ -78,25 +78,29 @@ def _paint_markings(lay: Layout, end: Face, side: Face, tail_u: float, rng: Rng)
         neg.red_stripe(end, car, rng, y=max(BEAM_TOP + 0.02, y))
 
 
-def _paste_side(canvas: Canvas, cam: Camera, car: CarSpec, face: Face, z_start: float,
-                shade: float) -> None:
+def _paste_side(
+    canvas: Canvas, cam: Camera, car: CarSpec, face: Face, z_start: float, shade: float
+) -> None:
     """Warp one car's side wall (facing the camera) into the image, with its depth."""
     import cv2
 
     sgn = float(np.sign(cam.pos[0])) or 1.0
     if sgn > 0:
-        hom = cam.plane_homography((car.width / 2, face.top, z_start), (0, 0, 1), (0, -1, 0),
-                                   face.ppm)
+        hom = cam.plane_homography(
+            (car.width / 2, face.top, z_start), (0, 0, 1), (0, -1, 0), face.ppm
+        )
     else:
-        hom = cam.plane_homography((-car.width / 2, face.top, z_start + car.length),
-                                   (0, 0, -1), (0, -1, 0), face.ppm)
+        hom = cam.plane_homography(
+            (-car.width / 2, face.top, z_start + car.length), (0, 0, -1), (0, -1, 0), face.ppm
+        )
     h, w = face.alpha.shape
     us = (np.arange(w) + 0.5) / face.ppm
     zs = z_start + (us if sgn > 0 else car.length - us)
     pts = np.stack([np.full(w, sgn * car.width / 2), np.full(w, 2.0), zs], axis=1)
     depth_tex = np.repeat(f32(cam.to_camera(pts)[:, 2])[None, :], h, axis=0)
-    depth = f32(cv2.warpPerspective(depth_tex, hom, (canvas.width, canvas.height),
-                                    flags=cv2.INTER_NEAREST))
+    depth = f32(
+        cv2.warpPerspective(depth_tex, hom, (canvas.width, canvas.height), flags=cv2.INTER_NEAREST)
+    )
     canvas.paste(face.texture, face.alpha, hom, depth, shade=shade)
 
 
@@ -106,8 +110,11 @@ def _train_ahead(canvas: Canvas, lay: Layout, shade: float, rng: Rng) -> float:
     z = lay.end_z + lay.car.length + uniform(rng, (0.9, 1.3))
     for _ in range(int(rng.integers(0, 4))):
         same = rng.random() < 0.6  # block trains: the same car type over and over
-        car = replace(lay.car, length=uniform(rng, (12.0, 19.0))) if same else choose_car(
-            rng, red_body=False)
+        car = (
+            replace(lay.car, length=uniform(rng, (12.0, 19.0)))
+            if same
+            else choose_car(rng, red_body=False)
+        )
         cars.append((car, z))
         z += car.length + uniform(rng, (0.9, 1.3))
     for car, z0 in reversed(cars):
@@ -125,10 +132,20 @@ def _paste_car(canvas: Canvas, lay: Layout, light: Light, rng: Rng) -> None:
     shade = float(np.clip(light.side_shade, 0.5, 1.4))
     far = _train_ahead(canvas, lay, shade, rng)
     half = car.width / 2 + 0.25
-    shadow = np.asarray([(-half, 0.0, lay.end_z - 0.3), (half, 0.0, lay.end_z - 0.3),
-                         (half, 0.0, far), (-half, 0.0, far)])
-    canvas.paint_polygon(cam.project_polygon(shadow), (10.0, 10.0, 12.0),
-                         cam.depth((0.0, 0.0, lay.end_z)), alpha=uniform(rng, (0.25, 0.55)))
+    shadow = np.asarray(
+        [
+            (-half, 0.0, lay.end_z - 0.3),
+            (half, 0.0, lay.end_z - 0.3),
+            (half, 0.0, far),
+            (-half, 0.0, far),
+        ]
+    )
+    canvas.paint_polygon(
+        cam.project_polygon(shadow),
+        (10.0, 10.0, 12.0),
+        cam.depth((0.0, 0.0, lay.end_z)),
+        alpha=uniform(rng, (0.25, 0.55)),
+    )
     end, side = _faces(lay)
     tail_u = 0.0 if cam.pos[0] >= 0 else car.length
     draw_side(side, car, rng)
@@ -185,8 +202,11 @@ def _occluding_pole(canvas: Canvas, lay: Layout, rng: Rng) -> None:
     mask = rows[:, None] * across[None, :]
     roundness = 1.0 - 0.5 * ((xs - cx) / max(width / 2, 1.0)) ** 2
     colour = np.clip(roundness, 0.4, 1.0)[None, :, None] * np.float32(grey)
-    canvas.paint(mask.astype(np.float32), np.broadcast_to(colour, (*mask.shape, 3)).astype(
-        np.float32), lay.camera.depth(lay.disc_pos) * 0.5)
+    canvas.paint(
+        mask.astype(np.float32),
+        np.broadcast_to(colour, (*mask.shape, 3)).astype(np.float32),
+        lay.camera.depth(lay.disc_pos) * 0.5,
+    )
 
 
 def _world_negatives(canvas: Canvas, lay: Layout, rng: Rng) -> None:
@@ -201,8 +221,13 @@ def _world_negatives(canvas: Canvas, lay: Layout, rng: Rng) -> None:
         for _ in range(int(rng.integers(0, 5))):
             colour = hsv_to_bgr(uniform(rng, (10.0, 30.0)), uniform(rng, (0.0, 180.0)), 255.0)
             centre = (uniform(rng, (0.0, lay.width)), uniform(rng, (0.0, lay.height * 0.5)))
-            neg.lamp_glow(canvas, centre, lay.height * uniform(rng, (0.002, 0.008)), colour,
-                          uniform(rng, (0.6, 1.5)))
+            neg.lamp_glow(
+                canvas,
+                centre,
+                lay.height * uniform(rng, (0.002, 0.008)),
+                colour,
+                uniform(rng, (0.6, 1.5)),
+            )
 
 
 def paint(lay: Layout, rng: Rng) -> tuple[Uint8Image, FloatMap | None]:

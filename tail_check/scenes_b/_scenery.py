@@ -47,8 +47,9 @@ def buildings(canvas: Canvas, camera: Camera, rng: Rng) -> None:
         ppm = camera.focal / depth
         bw, bh = uniform(rng, (10.0, 40.0)) * ppm, uniform(rng, (6.0, 30.0)) * ppm
         x0 = uniform(rng, (-0.2, 1.0)) * canvas.width
-        wall = hsv_to_bgr(uniform(rng, (5.0, 30.0)), uniform(rng, (0.0, 70.0)),
-                          uniform(rng, (90.0, 210.0)))  # plaster, cream, brick, concrete
+        wall = hsv_to_bgr(
+            uniform(rng, (5.0, 30.0)), uniform(rng, (0.0, 70.0)), uniform(rng, (90.0, 210.0))
+        )  # plaster, cream, brick, concrete
         poly = np.array([(x0, base), (x0 + bw, base), (x0 + bw, base - bh), (x0, base - bh)])
         canvas.paint_polygon(poly, wall, depth)
         glass = (max(0.0, wall[0] * 0.5), wall[1] * 0.5, wall[2] * 0.45)
@@ -57,8 +58,14 @@ def buildings(canvas: Canvas, camera: Camera, rng: Rng) -> None:
             continue
         for row in np.arange(base - bh + step * 0.5, base - step * 0.6, step):
             for col in np.arange(x0 + step * 0.4, x0 + bw - step * 0.6, step):
-                win = np.array([(col, row), (col + step * 0.5, row),
-                                (col + step * 0.5, row + step * 0.5), (col, row + step * 0.5)])
+                win = np.array(
+                    [
+                        (col, row),
+                        (col + step * 0.5, row),
+                        (col + step * 0.5, row + step * 0.5),
+                        (col, row + step * 0.5),
+                    ]
+                )
                 canvas.paint_polygon(win, glass, depth)
 
 
@@ -76,10 +83,12 @@ def station(canvas: Canvas, camera: Camera, rng: Rng, side: float, z_far: float)
     canvas.paint_polygon(camera.project_polygon(line), (40.0, 200.0, 230.0), 30.0)
     for z in np.arange(uniform(rng, (8.0, 20.0)), z_far, uniform(rng, (8.0, 14.0))):
         x = side * 5.0
-        pillar = np.asarray([(x - 0.15, y, z), (x + 0.15, y, z), (x + 0.15, 4.5, z),
-                             (x - 0.15, 4.5, z)])
-        canvas.paint_polygon(camera.project_polygon(pillar), (70.0, 75.0, 80.0),
-                             camera.depth((x, 2.0, float(z))))
+        pillar = np.asarray(
+            [(x - 0.15, y, z), (x + 0.15, y, z), (x + 0.15, 4.5, z), (x - 0.15, 4.5, z)]
+        )
+        canvas.paint_polygon(
+            camera.project_polygon(pillar), (70.0, 75.0, 80.0), camera.depth((x, 2.0, float(z)))
+        )
 
 
 def catenary(canvas: Canvas, camera: Camera, rng: Rng, z_end: float, front: bool) -> None:
@@ -94,8 +103,9 @@ def catenary(canvas: Canvas, camera: Camera, rng: Rng, z_end: float, front: bool
         if (z < z_end) != front:
             continue
         w = 0.18
-        mast = np.asarray([(x - w, 0.0, z), (x + w, 0.0, z), (x + w * 0.7, 8.5, z),
-                           (x - w * 0.7, 8.5, z)])
+        mast = np.asarray(
+            [(x - w, 0.0, z), (x + w, 0.0, z), (x + w * 0.7, 8.5, z), (x - w * 0.7, 8.5, z)]
+        )
         depth = camera.depth((x, 4.0, float(z)))
         canvas.paint_polygon(camera.project_polygon(mast), concrete, depth)
         arm = np.asarray([(x, 7.2, z), (0.0, 6.9, z), (0.0, 7.0, z), (x, 7.35, z)])
@@ -112,6 +122,13 @@ def _wires(canvas: Canvas, camera: Camera) -> None:
         cam = camera.to_camera(pts)
         img = camera.project(pts[cam[:, 2] > 1.0])
         mask = np.zeros((canvas.height, canvas.width), np.uint8)
-        cv2.polylines(mask, [np.round(img * 4).astype(np.int32).reshape(-1, 1, 2)], False, 255,
-                      2, cv2.LINE_AA, 2)
+        cv2.polylines(
+            mask,
+            [np.round(img * 4).astype(np.int32).reshape(-1, 1, 2)],
+            False,
+            255,
+            2,
+            cv2.LINE_AA,
+            2,
+        )
         canvas.paint(mask.astype(np.float32) / 255.0 * 0.8, (40.0, 40.0, 45.0), 200.0)

@@ -12,8 +12,9 @@ from ._config import RANGES, FloatImage, FloatMap, Rng, f32, uniform
 Uint8Image = npt.NDArray[np.uint8]
 
 
-def tilt(image: FloatImage, disc_mask: FloatMap | None, rng: Rng
-         ) -> tuple[FloatImage, FloatMap | None]:
+def tilt(
+    image: FloatImage, disc_mask: FloatMap | None, rng: Rng
+) -> tuple[FloatImage, FloatMap | None]:
     """Mild rotation, shear and zoom about the image centre (mast not quite level)."""
     h, w = image.shape[:2]
     angle = np.deg2rad(uniform(rng, RANGES.rotation_deg))
@@ -23,8 +24,9 @@ def tilt(image: FloatImage, disc_mask: FloatMap | None, rng: Rng
     lin = np.array([[cos, -sin], [sin, cos]]) @ np.array([[1.0, shear], [0.0, 1.0]])
     centre = np.array([w / 2.0, h / 2.0])
     matrix = np.hstack([lin, (centre - lin @ centre)[:, None]])
-    out = cv2.warpAffine(image, matrix, (w, h), flags=cv2.INTER_LINEAR,
-                         borderMode=cv2.BORDER_REFLECT)
+    out = cv2.warpAffine(
+        image, matrix, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT
+    )
     mask: FloatMap | None = None
     if disc_mask is not None:
         mask = f32(cv2.warpAffine(disc_mask, matrix, (w, h), flags=cv2.INTER_LINEAR))
@@ -39,8 +41,9 @@ def optics(image: FloatImage, rng: Rng, *, night: bool) -> FloatImage:
         length = max(3, int(h * uniform(rng, (0.003, 0.014))))
         kernel = np.zeros((length, length), np.float32)
         kernel[length // 2, :] = 1.0 / length
-        rot = cv2.getRotationMatrix2D((length / 2 - 0.5, length / 2 - 0.5),
-                                      uniform(rng, (-20.0, 20.0)), 1.0)
+        rot = cv2.getRotationMatrix2D(
+            (length / 2 - 0.5, length / 2 - 0.5), uniform(rng, (-20.0, 20.0)), 1.0
+        )
         kernel = f32(cv2.warpAffine(kernel, rot, (length, length)))
         kernel /= max(float(kernel.sum()), 1e-6)
         out = f32(cv2.filter2D(out, -1, kernel))
@@ -66,8 +69,9 @@ def sensor(image: FloatImage, rng: Rng, *, night: bool) -> Uint8Image:
     shot = np.sqrt(linear * 0.004 + sigma**2)
     linear = np.clip(linear + noise * shot, 0.0, None)
     knee = uniform(rng, (0.85, 1.0))  # soft shoulder: highlights roll off instead of clipping
-    toned = np.where(linear < knee, linear, knee + (1 - knee) * np.tanh((linear - knee) /
-                                                                         max(1e-3, 1 - knee)))
+    toned = np.where(
+        linear < knee, linear, knee + (1 - knee) * np.tanh((linear - knee) / max(1e-3, 1 - knee))
+    )
     gamma = uniform(rng, (0.9, 1.1))
     out = np.clip(np.power(np.clip(toned, 0.0, 1.0), gamma) * 255.0, 0, 255)
     return np.asarray(np.round(out), dtype=np.uint8)

@@ -41,6 +41,7 @@ ENDPOINTS: list[tuple[str, str, frozenset[str]]] = [
     ("POST", "/api/v1/users/{name}/rotate", ADMIN_ONLY),
     ("POST", "/api/v1/users/{name}/revoke", ADMIN_ONLY),
     ("GET", "/api/v1/credential-changes", ADMIN_ONLY),
+    ("GET", "/api/v1/events", DISPATCH),  # transports.md: the raw event log
     ("POST", "/api/v1/cars", ADMIN_ONLY),
     ("GET", "/api/v1/cars", READERS),
     ("GET", "/api/v1/cars/{car_id}", READERS),

@@ -51,7 +51,7 @@ def _request(client: TestClient, method: str, path: str, headers: dict[str, str]
     url = path.format(**params)
     n = next(_serial)
     at = "2026-11-23T10:00:00Z"
-    if path.endswith("/events"):
+    if path.endswith("/events") and method == "POST":
         body = {"event_id": f"acc-{n}", "occurred_at": at, "kind": "heartbeat"}
         return client.post(url, json=body, headers=headers)
     if path.endswith("/snapshots"):

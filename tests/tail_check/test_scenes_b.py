@@ -21,8 +21,17 @@ from tail_check.scenes_b import CONDITIONS, NEGATIVE_KINDS, SceneB, iter_scenes,
 SMALL = (400, 300)
 TINY = (96, 72)
 REQUIRED_CONDITIONS = {"daylight", "overcast", "dusk", "night", "rain", "snow", "fog"}
-REQUIRED_KINDS = {"red_lettering", "red_stripe", "red_logo", "red_car_body", "signal_light",
-                  "tail_lamp", "hand_wheel", "red_barrier", "none"}
+REQUIRED_KINDS = {
+    "red_lettering",
+    "red_stripe",
+    "red_logo",
+    "red_car_body",
+    "signal_light",
+    "tail_lamp",
+    "hand_wheel",
+    "red_barrier",
+    "none",
+}
 
 
 def _red_fraction(scene: SceneB) -> float:
@@ -55,7 +64,11 @@ def test_same_seed_same_scene_and_different_seeds_differ() -> None:
     other = render_scene(12, size=SMALL)
     assert np.array_equal(first.image, again.image)
     assert (first.disc, first.bbox, first.condition, first.negative_kind) == (
-        again.disc, again.bbox, again.condition, again.negative_kind)
+        again.disc,
+        again.bbox,
+        again.condition,
+        again.negative_kind,
+    )
     assert not np.array_equal(first.image, other.image)
 
 
@@ -65,7 +78,8 @@ def test_iter_scenes_is_deterministic_and_counts() -> None:
     assert len(two) == 2 and len(one) == 1
     assert np.array_equal(two[0].image, one[0].image) and two[0].bbox == one[0].bbox
     assert not np.array_equal(two[0].image[:8, :8], two[1].image[:8, :8]) or (
-        two[0].image.shape != two[1].image.shape)
+        two[0].image.shape != two[1].image.shape
+    )
     assert list(iter_scenes(0, seed=5)) == []
 
 

@@ -1,0 +1,243 @@
+"""Events per second into PostgreSQL over HTTP, MQTT (``depot mqtt``) and JetStream
+(``depot consume``), side by side in one run on one database.
+
+Each transport carries the same single-event messages (axle counts and heartbeats from 40
+devices) and is timed from the first send to the last answer: over HTTP the 201 of the last
+POST, over the brokers the last answer on the results topic, which the service publishes only
+after the commit that stored the event (the broker is acknowledged after that commit too).
+
+    .venv/bin/python -m bench.transports [--events 4000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import uuid
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import httpx
+
+from bench._server import ADMIN_TOKEN, admin, bench_database, serve
+
+DEPOT = str(Path(sys.executable).parent / "depot")
+DEVICES = 40
+HTTP_CLIENTS = 8
+
+
+def _devices(url: str) -> list[tuple[str, str]]:
+    """A station pair, one section, 40 axle counters: (id, key)."""
+    with httpx.Client(base_url=f"{url}/api/v1", headers=admin(), timeout=30) as client:
+        for station in ("A", "B"):
+            client.post("/stations", json={"id": station, "name": station}).raise_for_status()
+        section = {"id": "AB", "from_station": "A", "to_station": "B", "mode": "primary"}
+        client.post("/sections", json=section).raise_for_status()
+        out = []
+        for n in range(DEVICES):
+            body = {"id": f"AB-ac-{n}", "station": "A", "section": "AB", "kind": "axle_counter"}
+            response = client.post("/devices", json=body)
+            response.raise_for_status()
+            out.append((body["id"], response.json()["key"]))
+    return out
+
+
+def _events(tag: str, count: int, devices: list[tuple[str, str]]) -> list[tuple[str, str, bytes]]:
+    """``count`` messages spread over the devices: every fifth a heartbeat."""
+    out = []
+    for n in range(count):
+        device, key = devices[n % len(devices)]
+        seconds = n // len(devices)
+        event: dict[str, Any] = {
+            "event_id": f"{tag}-{n}",
+            "occurred_at": f"2026-11-23T06:{seconds // 60 % 60:02d}:{seconds % 60:02d}Z",
+        }
+        if n % 5 == 4:
+            event["kind"] = "heartbeat"
+        else:
+            event |= {"kind": "axle_count", "section": "AB", "axles": 24}
+        out.append((device, key, json.dumps(event).encode()))
+    return out
+
+
+def bench_http(url: str, messages: list[tuple[str, str, bytes]]) -> float:
+    def post(chunk: list[tuple[str, str, bytes]]) -> None:
+        with httpx.Client(base_url=url, timeout=60) as client:
+            for _, key, body in chunk:
+                headers = {"X-Device-Key": key, "Content-Type": "application/json"}
+                response = client.post("/api/v1/events", content=body, headers=headers)
+                assert response.status_code == 201, response.text
+
+    chunks = [messages[k::HTTP_CLIENTS] for k in range(HTTP_CLIENTS)]
+    start = time.perf_counter()
+    with ThreadPoolExecutor(HTTP_CLIENTS) as pool:
+        list(pool.map(post, chunks))
+    return len(messages) / (time.perf_counter() - start)
+
+
+class Collector:
+    """Counts answers with status 201 until all expected ones have come."""
+
+    def __init__(self, expected: int) -> None:
+        self.expected, self.created, self.other = expected, 0, 0
+        self.done = threading.Event()
+        self.lock = threading.Lock()
+
+    def record(self, payload: bytes) -> None:
+        status = json.loads(payload)["http_status"]
+        with self.lock:
+            if status == 201:
+                self.created += 1
+            else:
+                self.other += 1
+            if self.created >= self.expected:
+                self.done.set()
+
+
+def bench_mqtt(prefix: str, messages: list[tuple[str, str, bytes]]) -> float:
+    import paho.mqtt.client as mqtt
+    from paho.mqtt.enums import CallbackAPIVersion, MQTTProtocolVersion
+    from paho.mqtt.packettypes import PacketTypes
+    from paho.mqtt.properties import Properties
+
+    collector = Collector(len(messages))
+    client = mqtt.Client(CallbackAPIVersion.VERSION2, protocol=MQTTProtocolVersion.MQTTv5)
+    client.max_inflight_messages_set(1000)
+    client.max_queued_messages_set(0)
+    subscribed = threading.Event()
+    client.on_subscribe = lambda *_: subscribed.set()
+    client.on_message = lambda _c, _u, m: collector.record(bytes(m.payload))
+    client.connect("127.0.0.1", 1883)
+    client.subscribe(f"{prefix}/results/+", qos=1)
+    client.loop_start()
+    assert subscribed.wait(10)
+    start = time.perf_counter()
+    for device, key, body in messages:
+        properties = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
+        properties.UserProperty = ("device-key", key)
+        client.publish(f"{prefix}/events/{device}", body, qos=1, properties=properties)
+    assert collector.done.wait(300), f"MQTT: {collector.created} of {len(messages)} answered"
+    elapsed = time.perf_counter() - start
+    client.disconnect()
+    client.loop_stop()
+    assert collector.other == 0, f"MQTT: {collector.other} answers other than 201"
+    return len(messages) / elapsed
+
+
+def bench_nats(prefix: str, messages: list[tuple[str, str, bytes]]) -> float:
+    import asyncio
+
+    import nats
+
+    collector = Collector(len(messages))
+
+    async def run() -> float:
+        nc = await nats.connect("nats://127.0.0.1:4222")
+
+        async def on_result(msg: Any) -> None:
+            collector.record(msg.data)
+
+        await nc.subscribe(f"{prefix}.results.*", cb=on_result)
+        js = nc.jetstream()
+        start = time.perf_counter()
+        for at in range(0, len(messages), 500):
+            await asyncio.gather(*(
+                js.publish(f"{prefix}.events.{d}", body, headers={"Depot-Device-Key": k})
+                for d, k, body in messages[at : at + 500]
+            ))  # fmt: skip
+        while not collector.done.is_set() and time.perf_counter() - start < 300:
+            await asyncio.sleep(0.02)
+        elapsed = time.perf_counter() - start
+        for suffix in ("EVENTS", "DEAD"):
+            await js.delete_stream(f"{prefix.upper()}_{suffix}")
+        await nc.close()
+        return elapsed
+
+    elapsed = asyncio.run(run())
+    assert collector.done.is_set(), f"JetStream: {collector.created} of {len(messages)} answered"
+    assert collector.other == 0, f"JetStream: {collector.other} answers other than 201"
+    return len(messages) / elapsed
+
+
+def _forget_session(client_id: str) -> None:
+    """End the bench bridge's persistent session in the broker (clean start, no expiry)."""
+    import paho.mqtt.client as mqtt
+    from paho.mqtt.enums import CallbackAPIVersion, MQTTProtocolVersion
+
+    client = mqtt.Client(
+        CallbackAPIVersion.VERSION2, client_id=client_id, protocol=MQTTProtocolVersion.MQTTv5
+    )
+    client.connect("127.0.0.1", 1883, clean_start=True)
+    client.loop_start()
+    time.sleep(0.2)
+    client.disconnect()
+    client.loop_stop()
+
+
+def _start(env: dict[str, str], command: str, ready: str, log: Path) -> subprocess.Popen[bytes]:
+    with open(log, "wb") as out:
+        process = subprocess.Popen(
+            [DEPOT, command], env=env, stdout=out, stderr=out, start_new_session=True
+        )
+    deadline = time.monotonic() + 120
+    while ready not in log.read_text(errors="replace"):
+        if process.poll() is not None or time.monotonic() > deadline:
+            raise RuntimeError(f"depot {command} did not start: {log.read_text()[-2000:]}")
+        time.sleep(0.1)
+    return process
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--events", type=int, default=4000, help="messages per transport")
+    parser.add_argument("--consumers", type=int, default=2, help="depot consume processes")
+    args = parser.parse_args()
+    os.environ.setdefault(
+        "DEPOT_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/postgres"
+    )
+    database = bench_database("depot_bench_transports")
+    tag = uuid.uuid4().hex[:8]
+    env = {
+        **os.environ,
+        "DEPOT_DATABASE_URL": database,
+        "DEPOT_DATA_DIR": tempfile.mkdtemp(prefix="depot-bench-transports-"),
+        "DEPOT_ADMIN_TOKEN": ADMIN_TOKEN,
+        "DEPOT_ENVIRONMENT": "test",
+        "DEPOT_MQTT_PREFIX": f"depot-bench/{tag}/v1",
+        "DEPOT_MQTT_CLIENT_ID": f"depot-bench-{tag}",
+        "DEPOT_NATS_PREFIX": f"bench{tag}",
+    }
+    logs = Path(env["DEPOT_DATA_DIR"])
+    with serve(database) as url:
+        devices = _devices(url)
+        workers = [_start(env, "mqtt", "subscribed to", logs / "mqtt.log")]
+        workers += [
+            _start(env, "consume", "consuming", logs / f"consume-{n}.log")
+            for n in range(args.consumers)
+        ]
+        try:
+            http = bench_http(url, _events("http", args.events, devices))
+            mqtt_rate = bench_mqtt(env["DEPOT_MQTT_PREFIX"], _events("mqtt", args.events, devices))
+            nats_rate = bench_nats(env["DEPOT_NATS_PREFIX"], _events("nats", args.events, devices))
+        finally:
+            for process in workers:
+                os.killpg(process.pid, signal.SIGTERM)
+                process.wait(timeout=30)
+            _forget_session(env["DEPOT_MQTT_CLIENT_ID"])
+    print(f"{args.events} single-event messages per transport into {database.split('@')[-1]}")
+    print(f"  HTTP  POST /events ({HTTP_CLIENTS} clients, 2 workers): {http:8.0f} events/s")
+    print(f"  MQTT  depot mqtt (1 bridge):                  {mqtt_rate:8.0f} events/s")
+    print(f"  NATS  depot consume ({args.consumers} consumers):       {nats_rate:8.0f} events/s")
+    print(f"  ratios to HTTP: MQTT {mqtt_rate / http:.2f}, JetStream {nats_rate / http:.2f}")
+
+
+if __name__ == "__main__":
+    main()

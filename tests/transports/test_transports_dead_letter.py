@@ -1,0 +1,43 @@
+"""A JetStream message that cannot be stored ``max_deliver`` times goes to the dead-letter
+subject with the reason, and is acknowledged: never silently dropped, never retried forever."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from tests.reliability.relkit import depot_env
+from tests.transports.tkit import RunNames, brokers, consumer, until
+
+UNREACHABLE = "postgresql+psycopg://postgres@127.0.0.1:1/nowhere"  # nothing listens on port 1
+
+
+def test_undeliverable_message_goes_to_dead_letters_with_reason(tmp_path: Path) -> None:
+    names = RunNames()
+    with brokers(names) as (_, __, devices):
+        env = {
+            **depot_env(UNREACHABLE, tmp_path),
+            **names.env(),
+            "DEPOT_NATS_MAX_DELIVER": "2",
+            "DEPOT_NATS_ACK_WAIT_S": "1",
+        }
+        worker = consumer(env, tmp_path, 0)
+        worker.start()
+        try:
+            event = {"event_id": "dl-1", "occurred_at": "2026-11-23T06:00:00Z",
+                     "kind": "heartbeat"}  # fmt: skip
+            payload = json.dumps(event).encode()
+            devices.publish_all([("A-cam-1", "some-key", payload)])
+            dead_stream = f"{names.nats_prefix.upper()}_DEAD"
+            until(lambda: devices.stream_messages(dead_stream) > 0, within=60, what="a dead letter")
+            letters = devices.dead_letters(dead_stream, f"{names.nats_prefix}.dead.*")
+            stream = f"{names.nats_prefix.upper()}_EVENTS"
+            info = devices.consumer_info(stream, "depot-ingest")
+        finally:
+            worker.stop()
+    (letter,) = letters
+    assert letter.subject == f"{names.nats_prefix}.dead.A-cam-1"
+    assert letter.data == payload  # as the device sent it, so an operator can send it again
+    reason = letter.headers["Depot-Dead-Reason"]
+    assert "failed 2 deliveries" in reason and "database unavailable" in reason, reason
+    assert (info.num_ack_pending, info.num_pending) == (0, 0), "the dead letter was not acked"

@@ -1,0 +1,185 @@
+"""``depot mqtt``: the bridge from an MQTT 5 broker to the ingest service.
+
+Devices publish (QoS 1) to ``{prefix}/events/{device_id}`` with their key in the user
+property ``device-key``. The bridge holds a shared subscription (several bridges split the
+load) in a persistent session under a stable client id, and acknowledges a message (PUBACK,
+sent by hand) only after the transaction that stored it has committed: a bridge that dies
+before that gets the message again when it comes back, and idempotency drops the repeat.
+"""
+
+from __future__ import annotations
+
+import logging
+import queue
+import signal
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+from urllib.parse import urlsplit
+
+import paho.mqtt.client as mqtt
+from paho.mqtt.enums import CallbackAPIVersion, MQTTProtocolVersion
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
+from sqlalchemy.orm import Session, sessionmaker
+
+from transports.envelope import DATABASE_DOWN, Answer, Message, handle_batch
+
+log = logging.getLogger("depot.mqtt")
+SESSION_EXPIRY_S = 7 * 24 * 3600  # a bridge down for a week still finds its queued messages
+SHARE_GROUP = "depot"
+KEY_PROPERTY = "device-key"
+
+
+@dataclass(frozen=True)
+class MqttConfig:
+    broker_url: str
+    client_id: str
+    prefix: str
+    inflight: int  # MQTT 5 receive maximum: messages the broker may have unacknowledged with us
+    batch: int  # messages committed together, at most
+    max_bytes: int
+
+    @property
+    def subscription(self) -> str:
+        return f"$share/{SHARE_GROUP}/{self.prefix}/events/+"
+
+
+def broker_address(url: str) -> tuple[str, int]:
+    """``mqtt://host:port`` (also ``tcp://``) as (host, port); port 1883 when not given."""
+    parts = urlsplit(url if "://" in url else f"mqtt://{url}")
+    if parts.scheme not in ("mqtt", "tcp") or not parts.hostname:
+        raise ValueError(f"not an MQTT broker URL: {url!r}; write mqtt://HOST:PORT")
+    return parts.hostname, parts.port or 1883
+
+
+@dataclass(frozen=True)
+class _Incoming:
+    mid: int
+    qos: int
+    connection: int  # a packet id means something only on the connection it came on
+    message: Message
+    correlation: bytes | None
+
+
+def _properties(packet_type: int) -> Properties:
+    return Properties(packet_type)  # type: ignore[no-untyped-call]  # paho's is untyped
+
+
+def _user_property(properties: Properties | None, name: str) -> str | None:
+    for key, value in getattr(properties, "UserProperty", None) or ():
+        if key == name:
+            return str(value)
+    return None
+
+
+class Bridge:
+    """One bridge process: the network thread queues messages, the main thread commits them."""
+
+    def __init__(self, sessions: sessionmaker[Session], config: MqttConfig) -> None:
+        self.sessions, self.config = sessions, config
+        self.incoming: queue.Queue[_Incoming] = queue.Queue()
+        self.stopping = threading.Event()
+        self.connection = 0
+        self.client = mqtt.Client(
+            CallbackAPIVersion.VERSION2,
+            client_id=config.client_id,
+            protocol=MQTTProtocolVersion.MQTTv5,
+            manual_ack=True,
+        )
+        self.client.on_connect = self._on_connect
+        self.client.on_message = self._on_message
+        self.client.on_subscribe = lambda *_: log.info("subscribed to %s", config.subscription)
+        self.client.reconnect_delay_set(min_delay=1, max_delay=10)
+        # Answers are sent at once, never held back behind paho's window of unacknowledged
+        # publishes: an acknowledgement must not leave before the answer that precedes it.
+        self.client.max_inflight_messages_set(0)
+        self.client.max_queued_messages_set(0)
+
+    def _on_connect(self, client: mqtt.Client, _: Any, flags: Any, code: Any, __: Any) -> None:
+        if code.is_failure:
+            log.error("the broker refused the connection: %s", code)
+            return
+        self.connection += 1
+        log.info(
+            "connected as %s (session present: %s); subscribing to %s",
+            self.config.client_id,
+            flags.session_present,
+            self.config.subscription,
+        )
+        client.subscribe(self.config.subscription, qos=1)
+
+    def _on_message(self, _: mqtt.Client, __: Any, msg: mqtt.MQTTMessage) -> None:
+        device_id = msg.topic.rsplit("/", 1)[-1]
+        properties = getattr(msg, "properties", None)
+        key = _user_property(properties, KEY_PROPERTY)
+        self.incoming.put(
+            _Incoming(
+                mid=msg.mid,
+                qos=msg.qos,
+                connection=self.connection,
+                message=Message(device_id, key, bytes(msg.payload)),
+                correlation=getattr(properties, "CorrelationData", None),
+            )
+        )
+
+    def _take(self) -> list[_Incoming]:
+        """The next batch: what is waiting, at most ``batch`` messages; [] after a quiet 0.5 s."""
+        try:
+            items = [self.incoming.get(timeout=0.5)]
+        except queue.Empty:
+            return []
+        while len(items) < self.config.batch:
+            try:
+                items.append(self.incoming.get_nowait())
+            except queue.Empty:
+                break
+        return items
+
+    def _commit(self, items: list[_Incoming]) -> list[Answer] | None:
+        """Store the batch; while the database is down, keep the messages and try again."""
+        delay = 0.5
+        while not self.stopping.is_set():
+            try:
+                return handle_batch(
+                    self.sessions,
+                    [i.message for i in items],
+                    transport="mqtt",
+                    max_bytes=self.config.max_bytes,
+                )
+            except DATABASE_DOWN as exc:
+                name = type(exc).__name__
+                log.warning("database unavailable (%s); retrying in %.1f s", name, delay)
+                time.sleep(delay)
+                delay = min(delay * 2, 10.0)
+        return None  # stopping: unacknowledged, the broker gives them to us again
+
+    def _answer(self, item: _Incoming, answer: Answer) -> None:
+        properties = _properties(PacketTypes.PUBLISH)
+        if item.correlation is not None:
+            properties.CorrelationData = item.correlation
+        topic = f"{self.config.prefix}/results/{item.message.device_id}"
+        self.client.publish(topic, answer.to_json(), qos=1, properties=properties)
+        if item.connection == self.connection:
+            self.client.ack(item.mid, item.qos)
+
+    def serve(self) -> None:
+        """Run until SIGTERM or SIGINT; the batch in hand is finished first."""
+        host, port = broker_address(self.config.broker_url)
+        connect = _properties(PacketTypes.CONNECT)
+        connect.SessionExpiryInterval = SESSION_EXPIRY_S
+        connect.ReceiveMaximum = self.config.inflight
+        self.client.connect_async(host, port, clean_start=False, properties=connect)
+        self.client.loop_start()
+        for sig in (signal.SIGTERM, signal.SIGINT):
+            signal.signal(sig, lambda *_: self.stopping.set())
+        try:
+            while not self.stopping.is_set():
+                items = self._take()
+                answers = self._commit(items) if items else []
+                for item, answer in zip(items, answers or (), strict=False):
+                    self._answer(item, answer)
+        finally:
+            self.client.disconnect()
+            self.client.loop_stop()
