@@ -4,6 +4,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 PURE := identification tail_check maintenance motion
+TYPED := core ingest service $(PURE) bench
 
 .PHONY: run test lint bench soak install clean format
 
@@ -22,14 +23,14 @@ run: $(STAMP)
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
-	$(VENV)/bin/mypy $(PURE)
-	$(VENV)/bin/mypy service ingest
+	$(VENV)/bin/mypy $(TYPED)
+	$(VENV)/bin/lint-imports
 
 test: lint
 	$(VENV)/bin/pytest $(PYTEST_ARGS)
 
 bench: $(STAMP)
-	@for b in bench/*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
+	@for b in bench/[!_]*.py; do m=$$(basename $$b .py); echo "== bench.$$m"; $(PY) -m bench.$$m || exit 1; done
 
 soak: $(STAMP)
 	DEPOT_SOAK=1 $(VENV)/bin/pytest tests/reliability -m "slow or not slow" $(PYTEST_ARGS)

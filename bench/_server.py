@@ -35,17 +35,20 @@ def bench_database(name: str) -> str:
             connection.execute(text(f'CREATE DATABASE "{name}"'))
         engine.dispose()
         return base.rsplit("/", 1)[0] + f"/{name}"
-    except Exception as exc:  # noqa: BLE001 - fall back and say so
+    except Exception as exc:
         print(f"(PostgreSQL unavailable: {type(exc).__name__}; using SQLite)")
         return f"sqlite:///{tempfile.mkdtemp()}/bench.sqlite3"
 
 
 @contextmanager
-def serve(database_url: str, *, workers: int = 2) -> Iterator[str]:
+def serve(
+    database_url: str, *, workers: int = 2, extra_env: dict[str, str] | None = None
+) -> Iterator[str]:
     """Migrate, start ``depot serve`` and yield its base URL; the server is killed afterwards."""
     data_dir = tempfile.mkdtemp(prefix="depot-bench-")
     env = {
         **os.environ,
+        **(extra_env or {}),
         "DEPOT_DATABASE_URL": database_url,
         "DEPOT_DATA_DIR": data_dir,
         "DEPOT_ADMIN_TOKEN": ADMIN_TOKEN,
@@ -54,26 +57,28 @@ def serve(database_url: str, *, workers: int = 2) -> Iterator[str]:
     depot = str(Path(sys.executable).parent / "depot")
     subprocess.run([depot, "migrate"], env=env, check=True, capture_output=True)
     port = free_port()
-    log = open(Path(data_dir) / "server.log", "w")  # noqa: SIM115 - closed below
-    process = subprocess.Popen(
-        [depot, "serve", "--port", str(port), "--workers", str(workers)],
-        env=env,
-        stdout=log,
-        stderr=log,
-    )
-    url = f"http://127.0.0.1:{port}"
+    command = [depot, "serve", "--port", str(port), "--workers", str(workers)]
+    with running(command, env, Path(data_dir), f"http://127.0.0.1:{port}/readyz") as _:
+        yield f"http://127.0.0.1:{port}"
+
+
+@contextmanager
+def running(command: list[str], env: dict[str, str], log_dir: Path, ready: str) -> Iterator[None]:
+    """Run ``command`` until the block ends; ready when ``ready`` answers 200."""
+    log = open(log_dir / "server.log", "w")  # noqa: SIM115 - closed below
+    process = subprocess.Popen(command, env=env, stdout=log, stderr=log)
     try:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
             try:
-                if httpx.get(f"{url}/readyz", timeout=1).status_code == 200:
+                if httpx.get(ready, timeout=1).status_code == 200:
                     break
             except httpx.HTTPError:
                 pass
             time.sleep(0.2)
         else:
             raise RuntimeError(f"server did not become ready; see {log.name}")
-        yield url
+        yield
     finally:
         process.terminate()
         try:

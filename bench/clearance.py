@@ -5,19 +5,15 @@ through the API (p50/p99, all evidence present), and ``/review`` render time wit
 from __future__ import annotations
 
 import statistics
-import sys
 import time
 from datetime import UTC, datetime, timedelta
-from pathlib import Path
+from typing import Any
 
 import cv2
 import httpx
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from _server import admin, bench_database, serve  # noqa: E402
-
-from tail_check.synth import render_snapshot  # noqa: E402
+from bench._server import admin, bench_database, serve
+from tail_check.synth import render_snapshot
 
 SECTIONS = 50
 RUNS_PER_SECTION = 20
@@ -47,13 +43,16 @@ def jpeg(seed: int) -> bytes:
 
 
 def run(
-    client: httpx.Client, keys: dict, section: int, n: int, image: bytes | None
+    client: httpx.Client, keys: dict[str, dict[str, str]], section: int, n: int, image: bytes | None
 ) -> float | None:
     """One run; returns the decision latency when all evidence is present."""
     start = T0 + timedelta(hours=n, minutes=section)
-    at = lambda dt: (start + timedelta(seconds=dt)).isoformat()  # noqa: E731
+
+    def at(dt: float) -> str:
+        return (start + timedelta(seconds=dt)).isoformat()
+
     x = f"X{section}"
-    events = [
+    events: list[tuple[str, dict[str, Any], int]] = [
         ("dep-ac", {"kind": "axle_count", "section": x, "axles": 40}, -30),
         ("dep-ilk", {"kind": "train_departed", "section": x, "train": f"{n}"}, 0),
     ]
@@ -85,11 +84,11 @@ def run(
     }
     t = time.perf_counter()
     client.post("/events", json=arrived, headers=keys[f"{x}-arr-ilk"]).raise_for_status()
-    section = client.get(f"/sections/{x}", headers=admin()).json()
+    answer = client.get(f"/sections/{x}", headers=admin()).json()
     latency = time.perf_counter() - t
-    state = section["state"]
+    state = answer["state"]
     if image is not None and state != "free":
-        print(f"  section {x} is {state}: {section['run']['decision']['reasons']}")
+        print(f"  section {x} is {state}: {answer['run']['decision']['reasons']}")
     return latency if image is not None and state == "free" else None
 
 

@@ -1,14 +1,13 @@
 """Benchmark of the identification decoders: passages decoded per second on one core, and
 accuracy on generated noisy passages (fixed seeds).
 
-Run: ``.venv/bin/python bench/identification.py`` (about 30 s). Throughput is the best of
+Run: ``.venv/bin/python -m bench.identification`` (about 30 s). Throughput is the best of
 three runs, in CPU time of this process (``time.process_time``) so that other load on the
 machine does not distort it; wall-clock figures are printed beside it.
 """
 
 from __future__ import annotations
 
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -16,16 +15,14 @@ from typing import Any
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from identification import em4100, manchester, simulate, time_pulse, wheel_marks  # noqa: E402
+from identification import em4100, manchester, simulate, time_pulse, wheel_marks
 
 N_SPEED = 3000
 N_ACCURACY = 1000
-IR = {"query_period_us": 250.0, "reflection_window_us": 50.0, "zone_length_m": 2.0}
+IR: dict[str, Any] = {"query_period_us": 250.0, "reflection_window_us": 50.0, "zone_length_m": 2.0}
 
 
-def ir_passage(rng: np.random.Generator, **noise: float) -> tuple[int, dict[str, Any]]:
+def ir_passage(rng: np.random.Generator, **noise: Any) -> tuple[int, dict[str, Any]]:
     car = int(rng.integers(1, 256))
     p = simulate.ir_pulses_passage(car, speed_kmh=float(rng.uniform(5, 15)), rng=rng, **IR, **noise)
     return car, p
@@ -39,7 +36,7 @@ def ir_decode(p: dict[str, Any]) -> int | None:
     ).car_number
 
 
-def m_passage(rng: np.random.Generator, **noise: float) -> tuple[int, dict[str, Any]]:
+def m_passage(rng: np.random.Generator, **noise: Any) -> tuple[int, dict[str, Any]]:
     car = int(rng.integers(0, 65536))
     clock = float(rng.uniform(-0.05, 0.05))
     return car, simulate.manchester_passage(car, rng=rng, clock_error=clock, **noise)
@@ -49,7 +46,7 @@ def m_decode(p: dict[str, Any]) -> int | None:
     return manchester.decode_passage(p["samples"], samples_per_bit=p["samples_per_bit"]).car_number
 
 
-def w_passage(rng: np.random.Generator, **noise: float) -> tuple[int, dict[str, Any]]:
+def w_passage(rng: np.random.Generator, **noise: Any) -> tuple[int, dict[str, Any]]:
     code = int(rng.integers(0, 256))
     direction = int(rng.integers(1, 3))
     return code, simulate.wheel_mark_passage(code, direction=direction, rng=rng, **noise)

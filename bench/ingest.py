@@ -1,27 +1,46 @@
-"""Ingest benchmark: a real uvicorn (2 workers) on 127.0.0.1 against PostgreSQL, clients in other
-processes. Prints single-event throughput with p50/p99 latency (acknowledged after commit) and
-batched throughput. Bounded in count and time."""
+"""Ingest benchmark: depot against the reference floor, side by side in one run.
+
+Three servers, each uvicorn with 2 workers on 127.0.0.1, each on its own PostgreSQL database:
+the floor (``bench/floor_app.py``: key check, pydantic, one ``INSERT … ON CONFLICT DO NOTHING
+RETURNING`` plus commit per request, one multi-row insert per batch), depot with group commit
+(the default) and depot with ``DEPOT_GROUP_COMMIT_MS=0``. The same load generator drives them in
+alternating rounds: ``wrk`` (install with ``apt-get install -y wrk``) with a Lua script, 32
+connections for single ``axle_count`` events, 8 connections for batches of 500 heartbeats; the
+Python client in ``bench/_load.py`` when ``wrk`` is absent. Printed: events/s, p50, p99 per
+server and the ratio depot / floor (summed over the rounds). Then the snapshot path on its own:
+10 cameras upload a 1080p JPEG at once, upload → verdict stored (the answer is sent after the
+commit that stores the verdict), p50/p99, while single events keep flowing.
+
+Run: ``.venv/bin/python -m bench.ingest`` (about 2 minutes; ``BENCH_ROUNDS`` and
+``BENCH_SECONDS`` shorten it).
+"""
 
 from __future__ import annotations
 
-import statistics
+import os
 import sys
-import time
-from concurrent.futures import ProcessPoolExecutor
+import tempfile
+from collections.abc import Iterator
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 import httpx
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _server import admin, bench_database, serve  # noqa: E402
+from bench import floor_app
+from bench._load import Round, drive, have_wrk
+from bench._server import admin, bench_database, free_port, running, serve
+from bench._snapshots import snapshot_latency
 
-DEVICES = 50
-SINGLE_PER_DEVICE = 100
-BATCHES_PER_DEVICE = 4
+DEVICES = 32
 BATCH = 500
+ROUNDS = int(os.environ.get("BENCH_ROUNDS", "3"))
+SECONDS = float(os.environ.get("BENCH_SECONDS", "6"))
+SINGLE_CONNECTIONS = 32
+BATCH_CONNECTIONS = 8
 
 
-def setup(url: str) -> list[str]:
+def setup_depot(url: str) -> list[str]:
+    """Two stations, section AB, ``DEVICES`` axle counters at B; returns their keys."""
     with httpx.Client(base_url=f"{url}/api/v1", headers=admin(), timeout=30) as client:
         client.post("/stations", json={"id": "A", "name": "A"}).raise_for_status()
         client.post("/stations", json={"id": "B", "name": "B"}).raise_for_status()
@@ -37,76 +56,78 @@ def setup(url: str) -> list[str]:
     return keys
 
 
-def post_singles(args: tuple[str, str, int]) -> list[float]:
-    url, key, index = args
-    latencies = []
-    with httpx.Client(
-        base_url=f"{url}/api/v1", headers={"X-Device-Key": key}, timeout=30
-    ) as client:
-        for n in range(SINGLE_PER_DEVICE):
-            body = {
-                "event_id": f"s-{index}-{n}",
-                "occurred_at": "2026-11-23T10:00:00Z",
-                "kind": "axle_count",
-                "section": "AB",
-                "axles": 4 * (n % 50),
-            }
-            start = time.perf_counter()
-            response = client.post("/events", json=body)
-            latencies.append(time.perf_counter() - start)
-            if response.status_code != 201:
-                raise RuntimeError(f"{response.status_code} {response.text}")
-    return latencies
+@contextmanager
+def serve_floor(database_url: str, keys: list[str]) -> Iterator[str]:
+    floor_app.prepare(database_url, {f"ac-{i}": key for i, key in enumerate(keys)})
+    port = free_port()
+    uvicorn = str(Path(sys.executable).parent / "uvicorn")
+    command = [uvicorn, "bench.floor_app:create_app", "--factory", "--workers", "2",
+               "--port", str(port), "--log-level", "warning"]  # fmt: skip
+    env = {**os.environ, "FLOOR_DATABASE_URL": database_url}
+    log_dir = Path(tempfile.mkdtemp(prefix="depot-floor-"))
+    with running(command, env, log_dir, f"http://127.0.0.1:{port}/healthz"):
+        yield f"http://127.0.0.1:{port}"
 
 
-def post_batches(args: tuple[str, str, int]) -> int:
-    url, key, index = args
-    sent = 0
-    with httpx.Client(
-        base_url=f"{url}/api/v1", headers={"X-Device-Key": key}, timeout=120
-    ) as client:
-        for b in range(BATCHES_PER_DEVICE):
-            events = [
-                {
-                    "event_id": f"b-{index}-{b}-{n}",
-                    "occurred_at": "2026-11-23T10:00:00Z",
-                    "kind": "heartbeat",
-                }
-                for n in range(BATCH)
-            ]
-            response = client.post("/events", json={"events": events})
-            response.raise_for_status()
-            results = response.json()["results"]
-            sent += sum(r["status"] == "created" for r in results)
-    return sent
+def _line(name: str, rounds: list[Round], per_request: int) -> tuple[float, str]:
+    requests = sum(r.requests for r in rounds)
+    seconds = sum(r.seconds for r in rounds)
+    rate = requests * per_request / seconds
+    p50 = sorted(r.p50_ms for r in rounds)[len(rounds) // 2]
+    p99 = max(r.p99_ms for r in rounds)
+    failed = sum(r.failed for r in rounds)
+    return rate, (
+        f"  {name:<22} {rate:>9,.0f} events/s  p50 {p50:6.1f} ms  p99 {p99:6.1f} ms"
+        f"  (not acknowledged: {failed})"
+    )
+
+
+def compare(servers: dict[str, tuple[str, list[str]]], *, batch: int, connections: int) -> None:
+    """Alternating rounds against every server (url, device keys); prints rates and ratios."""
+    rounds: dict[str, list[Round]] = {name: [] for name in servers}
+    for n in range(ROUNDS):
+        for name, (url, keys) in servers.items():  # alternating: drift hits every server alike
+            prefix = f"{name[:5]}-{batch}-{n}"
+            rounds[name].append(
+                drive(url, keys, prefix, batch=batch, connections=connections, seconds=SECONDS)
+            )
+    what = "single axle_count events" if batch == 0 else f"batches of {batch} heartbeats"
+    print(f"{what}, {connections} connections, {ROUNDS} rounds of {SECONDS:g} s:")
+    rates = {}
+    for name, result in rounds.items():
+        rates[name], line = _line(name, result, batch or 1)
+        print(line)
+    for name in servers:
+        if name != "floor":
+            print(f"  ratio {name} / floor: {rates[name] / rates['floor']:.2f}×")
 
 
 def main() -> None:
-    url_db = bench_database("depot_bench_ingest")
-    print(f"database: {url_db.split('@')[-1]}")
-    with serve(url_db, workers=2) as url:
-        keys = setup(url)
-        jobs = [(url, key, i) for i, key in enumerate(keys)]
-        with ProcessPoolExecutor(max_workers=8) as pool:
-            start = time.perf_counter()
-            latencies = [
-                lat for chunk in pool.map(post_singles, jobs, chunksize=7) for lat in chunk
-            ]
-            elapsed = time.perf_counter() - start
-            q = statistics.quantiles(latencies, n=100)
-            print(
-                f"single events: {len(latencies)} in {elapsed:.1f} s"
-                f" = {len(latencies) / elapsed:,.0f}/s; latency p50 {q[49] * 1000:.1f} ms,"
-                f" p99 {q[98] * 1000:.1f} ms (8 client processes)"
+    generator = "wrk" if have_wrk() else "the Python client (install wrk for the real figures)"
+    print(f"load generator: {generator}")
+    floor_db = bench_database("depot_bench_floor")
+    if floor_db.startswith("sqlite"):
+        print("the floor needs PostgreSQL; nothing measured")
+        return
+    with ExitStack() as stack:
+        grouped = stack.enter_context(serve(bench_database("depot_bench_ingest")))
+        ungrouped = stack.enter_context(
+            serve(
+                bench_database("depot_bench_ingest_nogc"),
+                extra_env={"DEPOT_GROUP_COMMIT_MS": "0"},
             )
-            batch_jobs = jobs[:10]
-            start = time.perf_counter()
-            created = sum(pool.map(post_batches, batch_jobs))
-            elapsed = time.perf_counter() - start
-            print(
-                f"batched events: {created} in {elapsed:.1f} s = {created / elapsed:,.0f}/s"
-                f" (batches of {BATCH})"
-            )
+        )
+        keys = setup_depot(grouped)
+        keys_nogc = setup_depot(ungrouped)
+        floor = stack.enter_context(serve_floor(floor_db, keys))
+        servers = {
+            "floor": (floor, keys),
+            "depot group commit": (grouped, keys),
+            "depot no group commit": (ungrouped, keys_nogc),
+        }
+        compare(servers, batch=0, connections=SINGLE_CONNECTIONS)
+        compare(servers, batch=BATCH, connections=BATCH_CONNECTIONS)
+        snapshot_latency(grouped, background_keys=keys)
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@
 * measure_smear / speed_from_image time per 1080p image;
 * the fusion accuracy on generated runs against both baselines.
 
-Run: ``python bench/motion.py [--runs N]``.
+Run: ``python -m bench.motion [--runs N]``.
 """
 
 from __future__ import annotations
@@ -15,15 +15,11 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from motion import optical  # noqa: E402
-from motion import simulation as sim  # noqa: E402
-from motion.fusion import FilterConfig, TrackFilter  # noqa: E402
+from motion import optical
+from motion import simulation as sim
+from motion.fusion import FilterConfig, TrackFilter
 
 
 def _updates_per_s(run: sim.Run, mode: str, repeat: int = 3) -> float:

@@ -52,6 +52,14 @@ Consists — ``identification.consist`` (event ``ir_id`` and the run's evidence)
     ``axle_sum(cars, axles_per_car, *, default_axles=None) -> int | None`` and
     ``compare_axles(departure, arrival) -> AxleComparison`` ("equal"/"fewer"/"more"/"unknown").
 
+EOT radio packets — ``identification.eot`` (FM-demodulated audio; event ``eot_status``)
+    ``decode_wav(path)`` / ``decode_audio(samples, rate)`` -> list of ``EotPacket`` with
+    ``.unit_address``, ``.pressure_psig``, ``.battery_charge`` (0–127), ``.battery_condition``,
+    ``.message_type``, ``.motion``, ``.marker_light``, the other flags, ``.bits``, ``.at_s``.
+    Only BCH-valid packets. ``parse_packet(bits)`` / ``bch_valid(bits)`` check a 74-bit
+    string (the service checks ``eot_status.bits`` with them). Channel impairments and an
+    FFSK modulator for tests: ``identification.eot_channel``.
+
 Simulators — ``identification.simulate`` (tests, benchmark, demo)
     ``ir_pulses_passage(car_number, *, speed_kmh, rng, ...)`` → ``{"query_period_us",
     "reflection_window_us", "reply_times_us"}``;
@@ -62,6 +70,6 @@ Simulators — ``identification.simulate`` (tests, benchmark, demo)
     for the reading and marking sections.
 """
 
-from identification import consist, manchester, simulate, time_pulse, wheel_marks
+from identification import consist, eot, manchester, simulate, time_pulse, wheel_marks
 
-__all__ = ["consist", "manchester", "simulate", "time_pulse", "wheel_marks"]
+__all__ = ["consist", "eot", "manchester", "simulate", "time_pulse", "wheel_marks"]

@@ -1,20 +1,23 @@
 """Routing of stored raw events to the features that derive state from them.
 
-Features register a handler per event kind (``@handles("train_arrived")``); ingestion calls them
-after the raw event row is stored, and ``depot replay`` calls them again to rebuild derived tables.
+Ingest knows the features only through a handler table: which handlers derive state from
+which event model. The application builds that table explicitly (``service/features.py``) and
+installs it once at start-up (`install`); ingestion runs the handlers after the raw event row
+is stored, and ``depot replay`` runs them again to rebuild derived tables.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from datetime import timedelta
 from typing import Any
 
 from sqlalchemy.orm import Session
 
+from core.models import Device
+from ingest.liveness import touch
 from ingest.models import RawEvent
-from service.setup.models import Device
+from ingest.schemas import ALL_EVENT_MODELS, EventBase, kind_of
 
 
 @dataclass(frozen=True)
@@ -29,27 +32,40 @@ class Derivation:
 
 
 Handler = Callable[[Derivation], dict[str, Any] | None]
-LAST_SEEN_GRANULARITY = timedelta(seconds=5)
-HANDLERS: dict[str, list[Handler]] = {}
+HandlerTable = Mapping[type[EventBase], Sequence[Handler]]
+# The installed table, indexed by kind (filled by `install`; empty means liveness only).
+HANDLERS: dict[str, tuple[Handler, ...]] = {}
 
 
-def handles(*kinds: str) -> Callable[[Handler], Handler]:
-    def register(handler: Handler) -> Handler:
-        for kind in kinds:
-            HANDLERS.setdefault(kind, []).append(handler)
-        return handler
+def install(table: HandlerTable) -> None:
+    """Install the application's handler table; every event model must have an entry.
 
-    return register
+    An entry may be empty (the event only proves the device alive). Raises ValueError when a
+    kind is missing or unknown, so a new event kind cannot be accepted and then ignored.
+    """
+    missing = [kind_of(m) for m in ALL_EVENT_MODELS if m not in table]
+    unknown = [model.__name__ for model in table if model not in ALL_EVENT_MODELS]
+    if missing or unknown:
+        raise ValueError(f"handler table: missing kinds {missing}, unknown models {unknown}")
+    HANDLERS.clear()
+    HANDLERS.update({kind_of(model): tuple(handlers) for model, handlers in table.items()})
+
+
+def has_handlers(kind: str) -> bool:
+    """Whether any feature derives state from events of ``kind`` (else: liveness only)."""
+    return bool(HANDLERS.get(kind))
 
 
 def derive(derivation: Derivation) -> dict[str, Any]:
     """Run every handler of the event's kind; merge what they report for the client."""
-    device = derivation.device
-    occurred = derivation.raw.occurred_at
     # Liveness has the heartbeat period's granularity: a device sending many events a second
     # need not rewrite its row for each one (decisions read staleness from the raw events).
-    if device.last_seen_at is None or occurred > device.last_seen_at + LAST_SEEN_GRANULARITY:
-        device.last_seen_at = occurred
+    touch(
+        derivation.session,
+        derivation.device,
+        derivation.raw.occurred_at,
+        replaying=derivation.replaying,
+    )
     result: dict[str, Any] = {}
     for handler in HANDLERS.get(derivation.raw.kind, ()):
         result.update(handler(derivation) or {})

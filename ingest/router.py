@@ -9,20 +9,23 @@ from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import JSONResponse
 from pydantic import ValidationError
+from sqlalchemy.orm import Session
 from starlette.datastructures import UploadFile
 
-from ingest import service
-from ingest.schemas import EventBatch
-from ingest.snapshots import check_image, store_image
-from service.auth import CurrentDevicePrincipal
-from service.database import DbSession
-from service.errors import (
+from core.auth import CurrentDevicePrincipal
+from core.database import DbSession
+from core.errors import (
     PayloadTooLarge,
     Unprocessable,
     UnsupportedMediaType,
     validation_errors,
 )
-from service.settings import get_settings
+from core.models import Device
+from core.settings import get_settings
+from ingest import service
+from ingest.commit_queue import committer_for
+from ingest.schemas import BatchResult, EventAck, EventBatch
+from ingest.snapshots import check_image, store_image
 
 router = APIRouter(tags=["devices"])
 
@@ -72,8 +75,11 @@ def _json(data: bytes) -> Any:
     "/events",
     openapi_extra=EVENT_BODY_DOC,
     responses={
-        201: {"description": "a new event, stored and committed"},
-        200: {"description": "a retry of a stored event (original result), or batch results"},
+        201: {"model": EventAck, "description": "a new event, stored and committed"},
+        200: {
+            "model": EventAck | BatchResult,
+            "description": "a retry of a stored event (original result), or batch results",
+        },
         409: {"description": "event_id reused with a different body"},
         422: {"description": "invalid event"},
     },
@@ -86,7 +92,8 @@ async def post_events(
     content_type = request.headers.get("content-type", "")
     if not content_type.split(";")[0].strip().lower().endswith("json"):
         raise UnsupportedMediaType("send events as application/json")
-    payload = _json(await _read_limited(request, settings.max_body_bytes))
+    body = await _read_limited(request, settings.max_body_bytes)
+    payload = _json(body)
     device = principal.device
     assert device is not None
     if isinstance(payload, dict) and "events" in payload and "kind" not in payload:
@@ -101,13 +108,46 @@ async def post_events(
             ) from None
         results = await run_in_threadpool(service.accept_batch, session, device, batch.events)
         return JSONResponse({"results": results}, status_code=200)
-    status, result = await run_in_threadpool(service.accept_event, session, device, payload)
+    status, result = await _single(session, device, payload, large=len(body) > INLINE_BYTES)
     return JSONResponse(result, status_code=status)
+
+
+# Bodies up to this size are validated on the event loop (microseconds); larger ones (long
+# pulse or sample lists) in a thread, so that they never hold up other requests.
+INLINE_BYTES = 16 * 1024
+
+
+async def _single(
+    session: Session, device: Device, payload: Any, *, large: bool
+) -> tuple[int, dict[str, Any]]:
+    """One event: through the worker's group commit when it is on, else in its own
+    transaction (the request session's, committed before the answer is sent)."""
+    settings = get_settings()
+    committer = committer_for(
+        session,
+        service.store_group,
+        service.store_validated,
+        window_ms=settings.group_commit_ms,
+        max_events=settings.group_commit_max,
+    )
+    if committer is None:
+        return await run_in_threadpool(service.accept_event, session, device, payload)
+    if large:
+        event = await run_in_threadpool(service.validate_event, device, payload)
+    else:
+        event = service.validate_event(device, payload)
+    result: tuple[int, dict[str, Any]] = await committer.submit(device, event, payload)
+    return result
 
 
 @router.post(
     "/snapshots",
-    responses={201: {"description": "stored"}, 200: {"description": "retry"}, 413: {}, 422: {}},
+    responses={
+        201: {"model": EventAck, "description": "stored"},
+        200: {"model": EventAck, "description": "a retry (original result)"},
+        413: {},
+        422: {},
+    },
 )
 async def post_snapshot(
     request: Request, session: DbSession, principal: CurrentDevicePrincipal

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from datetime import UTC, datetime
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal, get_args
 
 from pydantic import (
     AfterValidator,
@@ -18,6 +18,8 @@ from pydantic import (
 )
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
+from core.models import DEVICE_KINDS
+from identification.eot import PACKET_BITS, parse_packet
 from motion.samples import SAMPLE_LIMITS, sample_problem
 
 EARLIEST = datetime(2000, 1, 1, tzinfo=UTC)
@@ -40,7 +42,11 @@ Microseconds = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 
 
 class EventBase(BaseModel):
+    """Fields every device event has. ``senders`` are the device kinds that may send the kind
+    (another device gets 403); it is the one place that rule is written."""
+
     model_config = ConfigDict(extra="forbid")
+    senders: ClassVar[frozenset[str]] = frozenset()
 
     event_id: EventId
     occurred_at: DeviceTime
@@ -50,28 +56,38 @@ class SectionEvent(EventBase):
     section: SectionId
 
 
+EotUnitAddress = Annotated[int, Field(ge=0, le=2**17 - 1)]  # 17 bits on the air
+
+
 class TrainDeparted(SectionEvent):
     kind: Literal["train_departed"]
+    senders = frozenset({"interlocking"})
     train: TrainNumber
+    # The end-of-train unit armed on this train, when it carries one (clearance.md, EOT).
+    eot_unit: EotUnitAddress | None = None
 
 
 class TrainArrived(SectionEvent):
     kind: Literal["train_arrived"]
+    senders = frozenset({"interlocking"})
     train: TrainNumber
 
 
 class AxleCount(SectionEvent):
     kind: Literal["axle_count"]
+    senders = frozenset({"axle_counter"})
     axles: Annotated[int, Field(ge=0, le=10_000)]
 
 
 class IrId(SectionEvent):
     kind: Literal["ir_id"]
+    senders = frozenset({"ir_reader"})
     reads: Annotated[list[Annotated[int, Field(ge=0, le=2**32)]], Field(max_length=10_000)]
 
 
 class IrPulses(SectionEvent):
     kind: Literal["ir_pulses"]
+    senders = frozenset({"ir_reader"})
     query_period_us: Annotated[float, Field(gt=0, le=1e7, allow_inf_nan=False)]
     reflection_window_us: Annotated[float, Field(ge=0, le=1e7, allow_inf_nan=False)]
     reply_times_us: Annotated[list[Microseconds], Field(max_length=100_000)]
@@ -80,12 +96,14 @@ class IrPulses(SectionEvent):
 
 class IrManchester(SectionEvent):
     kind: Literal["ir_manchester"]
+    senders = frozenset({"ir_reader"})
     samples_per_bit: Annotated[int, Field(ge=2, le=1024)]
     samples: Annotated[list[Literal[0, 1]], Field(max_length=1_000_000)]
 
 
 class WheelMarks(SectionEvent):
     kind: Literal["wheel_marks"]
+    senders = frozenset({"wheel_mark_reader"})
     direction: Literal[1, 2]
     baseline: Annotated[list[int], Field(min_length=5, max_length=10_000)]
     axles: Annotated[
@@ -96,6 +114,7 @@ class WheelMarks(SectionEvent):
 
 class WheelMarksWritten(EventBase):
     kind: Literal["wheel_marks_written"]
+    senders = frozenset({"marking_station"})
     car: CarId
     code: Annotated[int, Field(ge=0, le=2**32)]
     detections: Annotated[list[Literal["W1", "W2"]], Field(max_length=1000)]
@@ -118,6 +137,7 @@ MeasuredValues = Annotated[
 
 class Measurement(EventBase):
     kind: Literal["measurement"]
+    senders = frozenset({"test_bench", "onboard_unit"})
     car: CarId
     values: MeasuredValues
 
@@ -129,6 +149,7 @@ _LIM = SAMPLE_LIMITS
 
 class MotionSample(EventBase):
     kind: Literal["motion_sample"]
+    senders = frozenset({"onboard_unit"})
     train: TrainNumber
     t: Annotated[float, Field(allow_inf_nan=False)]
     accel_mps2: Annotated[
@@ -180,8 +201,47 @@ class MotionSample(EventBase):
         return self
 
 
+class EotStatus(SectionEvent):
+    """An EOT radio receiver's report of one packet from the unit on a train's last car."""
+
+    kind: Literal["eot_status"]
+    senders = frozenset({"eot_receiver"})
+    unit_address: EotUnitAddress
+    pressure_psig: Annotated[int, Field(ge=0, le=127)]
+    motion: bool | None = None
+    marker_light: bool | None = None
+    battery_charge: Annotated[int, Field(ge=0, le=127)] | None = None  # raw 7-bit value
+    bits: Annotated[str, Field(pattern=rf"^[01]{{{PACKET_BITS}}}$")] | None = None
+
+    @model_validator(mode="after")
+    def _packet_agrees(self) -> EotStatus:
+        """With the raw packet given, its BCH check must pass and its fields match ours."""
+        if self.bits is None:
+            return self
+        try:
+            packet = parse_packet(self.bits)
+        except ValueError:
+            raise ValueError("bits: the packet fails its frame sync or BCH check") from None
+        given = {
+            "unit_address": self.unit_address,
+            "pressure_psig": self.pressure_psig,
+            "motion": self.motion,
+            "marker_light": self.marker_light,
+            "battery_charge": self.battery_charge,
+        }
+        wrong = [
+            f"{name} {value} (the packet says {getattr(packet, name)})"
+            for name, value in given.items()
+            if value is not None and value != getattr(packet, name)
+        ]
+        if wrong:
+            raise ValueError("fields disagree with bits: " + "; ".join(wrong))
+        return self
+
+
 class Heartbeat(EventBase):
     kind: Literal["heartbeat"]
+    senders = frozenset(DEVICE_KINDS)
 
 
 DeviceEvent = Annotated[
@@ -195,46 +255,42 @@ DeviceEvent = Annotated[
     | WheelMarksWritten
     | Measurement
     | MotionSample
+    | EotStatus
     | Heartbeat,
     Field(discriminator="kind"),
 ]
 EVENT_ADAPTER: TypeAdapter[Any] = TypeAdapter(DeviceEvent)
-EVENT_KINDS = (
-    "train_departed",
-    "train_arrived",
-    "axle_count",
-    "ir_id",
-    "ir_pulses",
-    "ir_manchester",
-    "wheel_marks",
-    "wheel_marks_written",
-    "measurement",
-    "motion_sample",
-    "heartbeat",
-)
-
-# Which event kinds each device kind may send (a device posting another kind gets 403).
-ALLOWED_KINDS: dict[str, frozenset[str]] = {
-    "interlocking": frozenset({"train_departed", "train_arrived", "heartbeat"}),
-    "camera": frozenset({"heartbeat", "tail_snapshot"}),
-    "wheel_mark_reader": frozenset({"wheel_marks", "heartbeat"}),
-    "ir_reader": frozenset({"ir_id", "ir_pulses", "ir_manchester", "heartbeat"}),
-    "axle_counter": frozenset({"axle_count", "heartbeat"}),
-    "marking_station": frozenset({"wheel_marks_written", "heartbeat"}),
-    "test_bench": frozenset({"measurement", "heartbeat"}),
-    "onboard_unit": frozenset({"motion_sample", "measurement", "heartbeat"}),
-}
 
 
 class TailSnapshot(SectionEvent):
     """The event stored for a ``POST /snapshots`` upload (the image itself is a file)."""
 
     kind: Literal["tail_snapshot"]
+    senders = frozenset({"camera"})
     image_sha256: Annotated[str, Field(pattern=r"^[0-9a-f]{64}$")]
     content_type: Literal["image/jpeg", "image/png"]
     width: int
     height: int
     size_bytes: int
+
+
+def kind_of(model: type[EventBase]) -> str:
+    """The ``kind`` literal of an event model."""
+    (kind,) = get_args(model.model_fields["kind"].annotation)
+    return str(kind)
+
+
+# Every kind `POST /events` accepts, derived from the union above; `tail_snapshot` comes with
+# an image through `POST /snapshots` instead.
+EVENT_MODELS: tuple[type[EventBase], ...] = get_args(get_args(DeviceEvent)[0])
+EVENT_KINDS: tuple[str, ...] = tuple(kind_of(model) for model in EVENT_MODELS)
+ALL_EVENT_MODELS: tuple[type[EventBase], ...] = (*EVENT_MODELS, TailSnapshot)
+MODEL_BY_KIND: dict[str, type[EventBase]] = {kind_of(m): m for m in ALL_EVENT_MODELS}
+# Which event kinds each device kind may send, from the models' `senders`.
+ALLOWED_KINDS: dict[str, frozenset[str]] = {
+    device_kind: frozenset(kind_of(m) for m in ALL_EVENT_MODELS if device_kind in m.senders)
+    for device_kind in DEVICE_KINDS
+}
 
 
 class EventBatch(BaseModel):

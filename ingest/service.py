@@ -1,30 +1,63 @@
-"""Idempotent storage of device events: validate, store raw, derive, report."""
+"""Idempotent storage of device events: validate, store raw, derive, report.
+
+The public entry points, for HTTP and for the other transports (MQTT, NATS bridges):
+
+``ingest_events(session_or_factory, device, payloads, *, transport="http")``
+    Store and derive a list of raw event payloads (dicts as received) of one authenticated
+    ``device``; returns one result per payload, in order, shaped like the batch answer of
+    ``POST /events``: ``{"event_id", "status": "created" | "duplicate" | "rejected",
+    "result"?, "error"?}``. With a session the caller commits (and must, before it tells the
+    device); with a session factory the function opens a session, commits, and returns only
+    after the commit. Each item stands alone, as in a batch.
+``accept_event(session, device, payload, *, transport="http")``
+    One payload: ``(HTTP status, answer)``; raises the 4xx errors.
+``accept_batch(session, device, items, *, transport="http")``
+    The batch answer's ``results`` list.
+``store_group(session, items)``
+    The group commit's unit: several validated events, possibly of several devices, in one
+    transaction; one outcome (``(status, answer)`` or the exception) per item.
+"""
 
 from __future__ import annotations
 
-import hashlib
-import json
 import logging
+from collections.abc import Callable
 from typing import Any
 
 from pydantic import ValidationError
-from sqlalchemy import select
-from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.exc import InterfaceError, OperationalError, PendingRollbackError
 from sqlalchemy.orm import Session
 
-from ingest.handlers import HANDLERS, Derivation, derive
+from core.errors import Conflict, DepotError, Forbidden, Unprocessable, validation_errors
+from core.models import Device, Section
+from ingest.handlers import Derivation, derive, has_handlers
+from ingest.liveness import restore_pending, snapshot_pending
 from ingest.models import RawEvent
+from ingest.rows import (
+    as_raw,
+    canonical_sha256,
+    insert_many,
+    insert_one,
+    raw_values,
+    stored,
+    write_answers,
+)
 from ingest.schemas import ALLOWED_KINDS, EVENT_ADAPTER, EVENT_KINDS, TailSnapshot
-from service.errors import Conflict, Forbidden, Unprocessable, validation_errors
-from service.setup.models import Device, Section
+
+__all__ = [
+    "accept_batch",
+    "accept_event",
+    "canonical_sha256",
+    "ingest_events",
+    "parse_event",
+    "store_event",
+    "store_group",
+    "store_validated",
+    "validate_event",
+    "validate_snapshot",
+]
 
 log = logging.getLogger("depot.ingest")
-
-
-def canonical_sha256(body: dict[str, Any]) -> str:
-    text = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=False, default=str)
-    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def parse_event(payload: Any) -> Any:
@@ -77,51 +110,66 @@ def check_section(session: Session, device: Device, section_id: str | None) -> N
         )
 
 
-def _insert_raw(session: Session, values: dict[str, Any]) -> RawEvent | None:
-    """Insert unless (device, event_id) exists; returns the new row, or None for a duplicate.
+def _answer_now(event: Any) -> dict[str, Any] | None:
+    """Events no feature derives from answer just "created": stored in the insert itself."""
+    if has_handlers(event.kind):
+        return None
+    return {"event_id": event.event_id, "status": "created"}
 
-    One statement either way: the unique key, not a read-then-write, decides who stored it,
-    so concurrent retries of the same event cannot both win.
-    """
-    dialect = session.get_bind().dialect.name
-    module = postgresql if dialect == "postgresql" else sqlite
-    statement = (
-        module.insert(RawEvent)
-        .values(**values)
-        .on_conflict_do_nothing(index_elements=["device_id", "event_id"])
-        .returning(RawEvent)
-    )
-    return session.scalars(statement).one_or_none()
+
+def _duplicate(
+    session: Session, device: Device, event: Any, digest: str, answers: list[dict[str, Any]]
+) -> tuple[int, dict[str, Any]]:
+    """200 with the original answer for a retry with the same event; 409 for another event."""
+    write_answers(session, answers)  # a retry may follow its original in the same transaction
+    stored_digest, result = stored(session, device.id, event.event_id)
+    if stored_digest != digest:
+        raise Conflict(
+            f"event_id {event.event_id!r} was already used by {device.id} for a different event"
+        )
+    return 200, result
+
+
+def _derive_new(
+    session: Session, device: Device, event: Any, raw_id: int, values: dict[str, Any]
+) -> dict[str, Any]:
+    """Derive a new event; returns its pending answer row (id, result, derive_error)."""
+    raw = as_raw(raw_id, values)
+    derived = run_derivation(session, raw, event, device)
+    result = {"event_id": event.event_id, "status": "created", **derived}
+    return {"id": raw_id, "result": result, "derive_error": raw.derive_error}
 
 
 def store_event(
-    session: Session, device: Device, event: Any, body: dict[str, Any]
+    session: Session,
+    device: Device,
+    event: Any,
+    body: dict[str, Any],
+    *,
+    transport: str = "http",
+    answers: list[dict[str, Any]] | None = None,
 ) -> tuple[int, dict[str, Any]]:
     """Store one validated event idempotently; returns (HTTP status, result body).
 
     201 for a new event (derived results included), 200 with the original result for a retry
-    with the same body, 409 (raised) for the same ``event_id`` with a different body.
+    with the same body, 409 (raised) for the same ``event_id`` with a different body. The
+    derived answer is written with ``answers`` when given (the caller writes them together,
+    before its commit), else at once.
     """
-    values = _raw_values(device, event, body)
-    digest = values["body_sha256"]
-    raw = _insert_raw(session, values)
-    if raw is None:
-        existing = session.scalar(
-            select(RawEvent).where(
-                RawEvent.device_id == device.id, RawEvent.event_id == event.event_id
-            )
-        )
-        assert existing is not None  # the conflict proves the row exists and is committed
-        if existing.body_sha256 != digest:
-            raise Conflict(
-                f"event_id {event.event_id!r} was already used by {device.id} for a different event"
-            )
-        return 200, existing.result
-    derived = run_derivation(session, raw, event, device)
-    if HANDLERS.get(event.kind):
-        raw.result = {"event_id": event.event_id, "status": "created", **derived}
-    session.flush()
-    return 201, raw.result
+    answer = _answer_now(event)
+    values = raw_values(device, event, body, answer=answer, transport=transport)
+    pending: list[dict[str, Any]] = [] if answers is None else answers
+    raw_id = insert_one(session, values)
+    if raw_id is None:
+        return _duplicate(session, device, event, values["body_sha256"], pending)
+    if answer is not None:
+        derive(Derivation(session, as_raw(raw_id, values), event, device))
+        return 201, answer
+    row = _derive_new(session, device, event, raw_id, values)
+    pending.append(row)
+    if answers is None:
+        write_answers(session, pending)
+    return 201, row["result"]
 
 
 def run_derivation(
@@ -129,25 +177,100 @@ def run_derivation(
 ) -> dict[str, Any]:
     """Derive state from a stored event; a failing derivation never loses the raw event."""
     derivation = Derivation(session, raw, event, device, replaying)
-    if not HANDLERS.get(raw.kind):
+    if not has_handlers(raw.kind):
         return derive(derivation)  # liveness only: nothing that can fail half-way
+    seen = snapshot_pending(session)
     try:
         with session.begin_nested():
             return derive(derivation)
     except (OperationalError, InterfaceError, PendingRollbackError):
         raise  # the database itself failed: nothing is acknowledged, the device retries
-    except Exception as exc:  # noqa: BLE001 - the raw event is kept; the fault is recorded
+    except Exception as exc:
         log.exception("deriving from %s/%s failed", device.id, raw.event_id)
+        restore_pending(session, seen)
         raw.derive_error = f"{type(exc).__name__}: {exc}"
         return {"derive_error": raw.derive_error}
 
 
-def accept_event(session: Session, device: Device, payload: Any) -> tuple[int, dict[str, Any]]:
+def accept_event(
+    session: Session, device: Device, payload: Any, *, transport: str = "http"
+) -> tuple[int, dict[str, Any]]:
     event = parse_event(payload)
     check_device_may_send(device, event.kind)
     check_section(session, device, getattr(event, "section", None))
     # Stored exactly as received; the canonical hash makes key order irrelevant for retries.
-    return store_event(session, device, event, payload)
+    return store_event(session, device, event, payload, transport=transport)
+
+
+def validate_event(device: Device, payload: Any) -> Any:
+    """The checks that need no database: schema and the device kind's permission."""
+    event = parse_event(payload)
+    check_device_may_send(device, event.kind)
+    return event
+
+
+def store_validated(
+    session: Session, device: Device, event: Any, body: dict[str, Any]
+) -> tuple[int, dict[str, Any]]:
+    """:func:`store_event` after the section check (which needs the database)."""
+    check_section(session, device, getattr(event, "section", None))
+    return store_event(session, device, event, body)
+
+
+def _lock_order(item: tuple[Device, Any, dict[str, Any]]) -> tuple[str, str]:
+    return (getattr(item[1], "section", None) or "", item[0].id)
+
+
+def store_group(
+    session: Session, items: list[tuple[Device, Any, dict[str, Any]]]
+) -> list[tuple[int, dict[str, Any]] | BaseException]:
+    """Store validated (device, event, payload) items in one transaction (group commit).
+
+    Optimistic: the raw rows go in with one statement, the derivations run in section, then
+    device order (two workers' groups take the section locks in the same order) without a
+    savepoint each, the answers go in with one executemany. A refusal (409, 422) is that
+    item's outcome and writes nothing. Any other failure propagates: the caller rolls the
+    group back and stores every item by itself (:func:`store_validated`, with the savepoint
+    that keeps a raw event whose derivation fails). The caller commits.
+    """
+    outcomes: list[tuple[int, dict[str, Any]] | BaseException | None] = [None] * len(items)
+    order = sorted(range(len(items)), key=lambda i: _lock_order(items[i]))
+    rows: dict[tuple[str, str], dict[str, Any]] = {}
+    for index in order:
+        device, event, body = items[index]
+        try:
+            check_section(session, device, getattr(event, "section", None))
+        except DepotError as exc:
+            outcomes[index] = exc
+            continue
+        answer = _answer_now(event)
+        rows.setdefault((device.id, event.event_id), raw_values(device, event, body, answer=answer))
+    inserted = insert_many(session, list(rows.values()))
+    answers: list[dict[str, Any]] = []
+    for index in order:
+        if outcomes[index] is not None:
+            continue
+        device, event, body = items[index]
+        raw_id = inserted.pop((device.id, event.event_id), None)
+        if raw_id is None:  # stored before, or twice in this group
+            try:
+                outcomes[index] = _duplicate(
+                    session, device, event, canonical_sha256(body), answers
+                )
+            except DepotError as exc:
+                outcomes[index] = exc
+            continue
+        values = rows[(device.id, event.event_id)]
+        raw = as_raw(raw_id, values)
+        derived = derive(Derivation(session, raw, event, device))
+        if values["result"]:
+            outcomes[index] = (201, values["result"])
+            continue
+        result = {"event_id": event.event_id, "status": "created", **derived}
+        answers.append({"id": raw_id, "result": result, "derive_error": None})
+        outcomes[index] = (201, result)
+    write_answers(session, answers)
+    return [o for o in outcomes if o is not None]
 
 
 def _rejected(event_id: Any, exc: Unprocessable | Conflict | Forbidden) -> dict[str, Any]:
@@ -186,39 +309,25 @@ def _validated(
     return results, accepted
 
 
-def _raw_values(device: Device, event: Any, body: dict[str, Any]) -> dict[str, Any]:
-    # Events no feature derives from answer just "created": store that answer with the row.
-    derived = bool(HANDLERS.get(event.kind))
-    return {
-        "device_id": device.id,
-        "event_id": event.event_id,
-        "kind": event.kind,
-        "occurred_at": event.occurred_at,
-        "section": getattr(event, "section", None),
-        "body": body,
-        "body_sha256": canonical_sha256(body),
-        "result": {} if derived else {"event_id": event.event_id, "status": "created"},
-    }
+def _stored_item(
+    session: Session, device: Device, event: Any, body: dict[str, Any], answers: list[Any]
+) -> dict[str, Any]:
+    """The batch item of an event stored before (a retry, or a reuse of its id)."""
+    try:
+        _, result = _duplicate(session, device, event, canonical_sha256(body), answers)
+    except Conflict as exc:
+        return _rejected(event.event_id, exc)
+    return {"event_id": event.event_id, "status": "duplicate", "result": result}
 
 
-def _insert_many(session: Session, rows: list[dict[str, Any]]) -> dict[str, RawEvent]:
-    """Insert the rows whose (device, event_id) is new, in one statement; returns them by id."""
-    if not rows:
-        return {}
-    module = postgresql if session.get_bind().dialect.name == "postgresql" else sqlite
-    statement = (
-        module.insert(RawEvent)
-        .on_conflict_do_nothing(index_elements=["device_id", "event_id"])
-        .returning(RawEvent)
-    )
-    return {raw.event_id: raw for raw in session.scalars(statement, rows)}
-
-
-def accept_batch(session: Session, device: Device, items: list[Any]) -> list[dict[str, Any]]:
+def accept_batch(
+    session: Session, device: Device, items: list[Any], *, transport: str = "http"
+) -> list[dict[str, Any]]:
     """Each item stands alone: a rejected item leaves the others stored.
 
-    The new events are inserted with one multi-row statement (the unique key still decides
-    duplicates), then derived one by one in the batch's order.
+    The new events' raw rows go in with one statement (``INSERT … SELECT FROM unnest`` on
+    PostgreSQL; the unique key still decides duplicates), then they are derived one by one in
+    the batch's order, and the derived answers are written with one executemany.
     """
     results, accepted = _validated(session, device, items)
     first: dict[str, tuple[int, Any, dict[str, Any]]] = {}
@@ -228,33 +337,55 @@ def accept_batch(session: Session, device: Device, items: list[Any]) -> list[dic
             repeats.append(entry)
         else:
             first[entry[1].event_id] = entry
-    inserted = _insert_many(session, [_raw_values(device, e, b) for _, e, b in first.values()])
+    rows = {
+        event.event_id: raw_values(
+            device, event, body, answer=_answer_now(event), transport=transport
+        )
+        for _, event, body in first.values()
+    }
+    inserted = insert_many(session, list(rows.values()))
+    answers: list[dict[str, Any]] = []
     for index, event, body in first.values():
-        raw = inserted.get(event.event_id)
-        if raw is None:  # stored before: a retry, or a reuse of the id
-            try:
-                status, result = store_event(session, device, event, body)
-            except Conflict as exc:
-                results[index] = _rejected(event.event_id, exc)
-                continue
+        raw_id = inserted.get((device.id, event.event_id))
+        if raw_id is None:
+            results[index] = _stored_item(session, device, event, body, answers)
+            continue
+        values = rows[event.event_id]
+        if values["result"]:
+            derive(Derivation(session, as_raw(raw_id, values), event, device))
+            result = values["result"]
         else:
-            derived = run_derivation(session, raw, event, device)
-            if HANDLERS.get(event.kind):
-                raw.result = {"event_id": event.event_id, "status": "created", **derived}
-            status, result = 201, raw.result
-        results[index] = {
-            "event_id": event.event_id,
-            "status": "created" if status == 201 else "duplicate",
-            "result": result,
-        }
+            row = _derive_new(session, device, event, raw_id, values)
+            answers.append(row)
+            result = row["result"]
+        results[index] = {"event_id": event.event_id, "status": "created", "result": result}
     for index, event, body in repeats:
-        try:
-            status, result = store_event(session, device, event, body)
-            results[index] = {"event_id": event.event_id, "status": "duplicate", "result": result}
-        except Conflict as exc:
-            results[index] = _rejected(event.event_id, exc)
-    session.flush()
+        results[index] = _stored_item(session, device, event, body, answers)
+    write_answers(session, answers)
     return [r for r in results if r is not None]
+
+
+def ingest_events(
+    target: Session | Callable[[], Session],
+    device: Device,
+    payloads: list[Any],
+    *,
+    transport: str = "http",
+) -> list[dict[str, Any]]:
+    """Store and derive ``payloads`` of ``device`` (see the module docstring); one result per
+    payload, in order. With a session factory, returns after the commit."""
+    if isinstance(target, Session):
+        return accept_batch(target, device, payloads, transport=transport)
+    session = target()
+    try:
+        results = accept_batch(session, device, payloads, transport=transport)
+        session.commit()
+        return results
+    except BaseException:
+        session.rollback()
+        raise
+    finally:
+        session.close()
 
 
 def validate_snapshot(session: Session, device: Device, payload: dict[str, Any]) -> TailSnapshot:

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 from PIL import Image, UnidentifiedImageError
 
-from service.errors import PayloadTooLarge, Unprocessable
+from core.errors import PayloadTooLarge, Unprocessable
 
 FORMATS = {"JPEG": ("image/jpeg", ".jpg"), "PNG": ("image/png", ".png")}
 SUFFIXES = dict(FORMATS.values())  # content type -> file suffix of the stored image

@@ -17,88 +17,10 @@ from scipy.special import ndtr, ndtri
 
 from maintenance._checks import FloatArray, as_vector, check_band, check_positive_int
 from maintenance.bands import INDICATOR_BAND, parameter_bands, to_indicators
+from maintenance.batch_forecast import forecast_rows
 from maintenance.calibration import quality_index
-from maintenance.fleet import CarAssessment, _reasons, assess_car
-from maintenance.forecasting import (
-    _MIN_UNIT_ROOT_GAP,
-    _TREND_DEGREE,
-    Forecast,
-    Trend,
-    minimum_history,
-)
-
-
-def _levinson_batch(r: FloatArray, order: int) -> tuple[FloatArray, FloatArray]:
-    """Levinson–Durbin over rows of ``r`` (n, order + 1); zero AR for ``r0 = 0``."""
-    n = r.shape[0]
-    a = np.zeros((n, order))
-    err = r[:, 0].copy()
-    live = err > 0.0
-    for m in range(order):
-        acc = r[:, m + 1] - np.einsum("ij,ij->i", a[:, :m], r[:, m:0:-1])
-        k = np.where(live & (err > 0.0), acc / np.where(err > 0.0, err, 1.0), 0.0)
-        a[:, :m] = a[:, :m] - k[:, None] * a[:, :m][:, ::-1]
-        a[:, m] = k
-        err = err * (1.0 - k * k)
-    return a, np.where(live, err, 0.0)
-
-
-def _ar_batch(resid: FloatArray, order: int) -> tuple[FloatArray, FloatArray]:
-    """Yule–Walker (biased, demeaned) per row; constant rows get ``a = 0, σ² = 0``."""
-    centred = resid - resid.mean(axis=1, keepdims=True)
-    n = centred.shape[1]
-    r = np.stack(
-        [np.einsum("ij,ij->i", centred[:, k:], centred[:, : n - k]) / n for k in range(order + 1)],
-        axis=1,
-    )
-    scale = np.maximum(1.0, np.abs(resid).max(axis=1))
-    flat = np.ptp(resid, axis=1) <= 1e-12 * scale
-    r[flat] = 0.0
-    return _levinson_batch(r, order)
-
-
-def _paths(resid: FloatArray, a: FloatArray, horizon: int) -> tuple[FloatArray, FloatArray]:
-    """AR continuation and ψ-weights, both (n_cars, horizon)."""
-    n, p = a.shape
-    buf = np.concatenate([resid[:, -p:], np.zeros((n, horizon))], axis=1)
-    psi = np.zeros((n, horizon + p))
-    psi[:, p] = 1.0
-    for h in range(horizon):
-        buf[:, p + h] = np.einsum("ij,ij->i", a, buf[:, h : p + h][:, ::-1])
-        if h:
-            psi[:, p + h] = np.einsum("ij,ij->i", a, psi[:, h : p + h][:, ::-1])
-    return buf[:, p:], psi[:, p:]
-
-
-def _forecast_batch(
-    y: FloatArray, order: int, horizon: int, trend: Trend
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Mean, std, AR coefficients, noise variance, slope for each row of ``y``."""
-    degree = _TREND_DEGREE[trend]
-    n = y.shape[1]
-    ahead = np.arange(1, horizon + 1, dtype=np.float64)
-    if degree > 0:
-        steps = np.arange(n, dtype=np.float64) - (n - 1)
-        design = np.column_stack([steps**d for d in range(degree + 1)])
-        cov = np.linalg.inv(design.T @ design)
-        coef = y @ (design @ cov)  # least squares for every car at once
-        resid = y - coef @ design.T
-        future = np.column_stack([ahead**d for d in range(degree + 1)])
-        base = coef @ future.T
-        slope = coef[:, 1]
-    else:
-        mean = y.mean(axis=1, keepdims=True)
-        resid = y - mean
-        base = np.repeat(mean, horizon, axis=1)
-        slope = np.zeros(y.shape[0])
-    a, sigma2 = _ar_batch(resid, order)
-    path, psi = _paths(resid, a, horizon)
-    var = sigma2[:, None] * np.cumsum(psi**2, axis=1)
-    if degree > 0:
-        gap = np.maximum(np.abs(1.0 - a.sum(axis=1)), _MIN_UNIT_ROOT_GAP)
-        spread = np.einsum("ij,jk,ik->i", future, cov, future)
-        var = var + (sigma2 / gap**2)[:, None] * spread[None, :]
-    return base + path, np.sqrt(var), a, sigma2, slope
+from maintenance.fleet import CarAssessment, assess_car, assessment_reasons
+from maintenance.forecasting import TREND_DEGREE, Forecast, Trend, minimum_history
 
 
 def _parameter_exit_batch(ind: FloatArray, horizon: int) -> FloatArray:
@@ -166,7 +88,7 @@ def assess_fleet(
     ids: list[str | None] = [None] * data.shape[0] if car_ids is None else [str(c) for c in car_ids]
     if len(ids) != data.shape[0]:
         raise ValueError(f"car_ids has {len(ids)} entries for {data.shape[0]} cars")
-    if trend not in _TREND_DEGREE:
+    if trend not in TREND_DEGREE:
         raise ValueError(f"trend must be 'none', 'linear' or 'quadratic', got {trend!r}")
     p, steps = check_positive_int(order, "order"), check_positive_int(horizon, "horizon")
     need = max(minimum_history(p, trend), p + 3)
@@ -193,7 +115,7 @@ def assess_fleet(
     ind = to_indicators(data, parameter_bands(band, data.shape[2]))
     y = quality_index(ind, w)
     recent = slice(-window, None) if window is not None else slice(None)
-    mean, std, a, sigma2, slope = _forecast_batch(y[:, recent], p, steps, trend)
+    mean, std, a, sigma2, slope = forecast_rows(y[:, recent], p, steps, trend)
     lo, hi = ib
     outside = (mean < lo) | (mean > hi)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -233,7 +155,7 @@ def assess_fleet(
                 risk=fc.risk,
                 parameter_exit_probability=p_out[c],
                 k_of_l_probability=float(k_of_l[c]),
-                reasons=_reasons(labels, ind[c, -1], contrib[c], fc, ib, steps, ahead),
+                reasons=assessment_reasons(labels, ind[c, -1], contrib[c], fc, ib, steps, ahead),
             )  # fmt: skip
         )
     return out

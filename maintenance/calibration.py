@@ -19,6 +19,7 @@ from scipy.special import ndtr
 
 from maintenance._checks import FloatArray, check_positive_int, check_probability
 from maintenance.bands import to_indicators
+from maintenance.batch_forecast import forecast_rows
 from maintenance.forecasting import minimum_history
 from maintenance.tolerance import ToleranceBand, tolerance_band
 from maintenance.weights import (
@@ -138,10 +139,8 @@ def _car_forecasts(
     index: FloatArray, cut: int, *, order: int, horizon: int, window: int | None
 ) -> tuple[FloatArray, FloatArray]:
     """Forecast mean and std (n_cars, horizon) of each car's index from its first ``cut`` steps."""
-    from maintenance.batch import _forecast_batch  # batch builds on this module
-
     start = 0 if window is None else max(cut - check_positive_int(window, "window"), 0)
-    means, stds, *_ = _forecast_batch(index[:, start:cut], order, horizon, "linear")
+    means, stds, *_ = forecast_rows(index[:, start:cut], order, horizon, "linear")
     return means, stds
 
 

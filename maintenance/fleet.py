@@ -160,24 +160,28 @@ def _parameter_exit(ind: FloatArray, horizon: int) -> FloatArray:
     return np.asarray(np.clip(ndtr((lo - at) / sd) + ndtr((at - hi) / sd), 0, 1))
 
 
-def _reasons(
+def assessment_reasons(
     names: tuple[str, ...], ind_last: FloatArray, contrib: FloatArray, fc: Forecast,
     band: tuple[float, float], horizon: int, times_ahead: FloatArray,
 ) -> tuple[str, ...]:  # fmt: skip
     out: list[str] = []
     lo, hi = band
     now = 1.0 + float(contrib.sum())
-    if fc.first_exit is not None:
+    if not lo <= now <= hi:
+        # Out already: saying "leaves its band 1 test ahead" would understate it.
+        out.append(f"already outside its band [{lo:.3f}, {hi:.3f}] now (index {now:.3f})")
+    elif fc.first_exit is not None:
+        ahead = "the next test" if fc.first_exit == 1 else f"{fc.first_exit} tests ahead"
         out.append(
-            f"index forecast leaves its band [{lo:.3f}, {hi:.3f}] at step {fc.first_exit} "
-            f"(t = {times_ahead[fc.first_exit - 1]:g}); risk {fc.risk:.0%} within {horizon} steps"
+            f"index forecast leaves its band [{lo:.3f}, {hi:.3f}] at {ahead} "
+            f"(t = {times_ahead[fc.first_exit - 1]:g}); risk {fc.risk:.0%} within {horizon} tests"
         )
     else:
         out.append(
-            f"index forecast stays inside [{lo:.3f}, {hi:.3f}] for {horizon} steps; "
+            f"index forecast stays inside [{lo:.3f}, {hi:.3f}] for the next {horizon} tests; "
             f"risk {fc.risk:.0%}"
         )
-    out.append(f"index now {now:.3f}, drifting {fc.slope:+.4f} per step")
+    out.append(f"index now {now:.3f}, drifting {fc.slope:+.4f} per test")
     order = np.argsort(-np.abs(contrib))
     top = [i for i in order[:3] if abs(contrib[i]) > 0.0]
     if top:
@@ -185,7 +189,7 @@ def _reasons(
         out.append(f"largest contributions to the index deviation: {parts}")
     outside = [names[i] for i in np.flatnonzero((ind_last < 0.0) | (ind_last > 2.0))]
     if outside:
-        out.append(f"already out of tolerance: {', '.join(outside)}")
+        out.append(f"parameters already out of tolerance: {', '.join(outside)}")
     return tuple(out)
 
 
@@ -280,7 +284,7 @@ def assess_car(
     recent = ind[-window:] if window is not None else ind
     p_out = _parameter_exit(recent, steps)
     kk = min(check_positive_int(k, "k"), data.shape[1])
-    reasons = _reasons(labels, ind[-1], contrib, fc, ib, steps, ahead)
+    reasons = assessment_reasons(labels, ind[-1], contrib, fc, ib, steps, ahead)
     return CarAssessment(
         status="ok",
         car_id=car_id,

@@ -20,8 +20,8 @@ from maintenance._checks import FloatArray, as_vector, check_band, check_positiv
 from maintenance.linear_prediction import psi_weights, yule_walker
 
 Trend = Literal["none", "linear", "quadratic"]
-_TREND_DEGREE = {"none": -1, "linear": 1, "quadratic": 2}
-_MIN_UNIT_ROOT_GAP = 0.05  # keeps σ/(1 − Σa) finite for near-unit-root fits
+TREND_DEGREE = {"none": -1, "linear": 1, "quadratic": 2}
+MIN_UNIT_ROOT_GAP = 0.05  # keeps σ/(1 − Σa) finite for near-unit-root fits
 
 
 @dataclass(frozen=True)
@@ -69,7 +69,7 @@ class Forecast:
 
 def minimum_history(order: int, trend: Trend = "none") -> int:
     """Fewest samples :func:`forecast` accepts for ``order`` and ``trend``."""
-    return int(order) + 2 + max(_TREND_DEGREE.get(trend, 0), 0)
+    return int(order) + 2 + max(TREND_DEGREE.get(trend, 0), 0)
 
 
 def _fit_ar(residual: FloatArray, order: int) -> tuple[FloatArray, float]:
@@ -146,9 +146,9 @@ def forecast(
     lo, hi = check_band(band)
     if not 0.0 < float(level) < 1.0:
         raise ValueError(f"level must be in (0, 1), got {level!r}")
-    if trend not in _TREND_DEGREE:
+    if trend not in TREND_DEGREE:
         raise ValueError(f"trend must be 'none', 'linear' or 'quadratic', got {trend!r}")
-    degree = _TREND_DEGREE[trend]
+    degree = TREND_DEGREE[trend]
     series = as_vector(y, "y")
     if window is not None:
         series = series[-check_positive_int(window, "window") :]
@@ -173,7 +173,7 @@ def forecast(
     values = base + _ar_path(residual, a, steps)
     var = sigma2 * np.cumsum(psi_weights(a, steps) ** 2)
     if degree > 0:
-        gap = max(abs(1.0 - float(a.sum())), _MIN_UNIT_ROOT_GAP)
+        gap = max(abs(1.0 - float(a.sum())), MIN_UNIT_ROOT_GAP)
         var = var + (sigma2 / gap**2) * np.einsum("ij,jk,ik->i", future, cov, future)
     std = np.sqrt(var)
     z = float(ndtri(0.5 + float(level) / 2.0))

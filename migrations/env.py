@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from alembic import context
 
-from service.database import make_engine
+from core.database import make_engine
+from core.settings import get_settings
 from service.models import metadata
-from service.settings import get_settings
 
 config = context.config
 

@@ -8,17 +8,18 @@ from typing import Any
 from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
 
+from core.errors import install_error_handlers
+from core.settings import get_settings
 from ingest.router import router as ingest_router
 from ingest.schemas import EVENT_ADAPTER, EventBatch
 from service import features
 from service.clearance.router import router as clearance_router
-from service.errors import install_error_handlers
 from service.fleet.review import router as fleet_review_router
 from service.fleet.router import router as fleet_router
 from service.fleet.schedule import lifespan as fleet_lifespan
 from service.health import router as health_router
 from service.review.router import router as review_router
-from service.settings import get_settings
+from service.setup.credentials_router import router as credentials_router
 from service.setup.router import router as setup_router
 from service.trains.router import router as trains_router
 
@@ -92,7 +93,7 @@ def create_app() -> FastAPI:
     logging.basicConfig(
         level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
     )
-    assert features.LOADED
+    features.install()
     app = FastAPI(
         title="depot",
         version="0.1.0",
@@ -103,6 +104,7 @@ def create_app() -> FastAPI:
     install_error_handlers(app)
     app.include_router(health_router)
     app.include_router(setup_router, prefix=API)
+    app.include_router(credentials_router, prefix=API)
     app.include_router(ingest_router, prefix=API)
     app.include_router(clearance_router, prefix=API)
     app.include_router(review_router)

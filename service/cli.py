@@ -7,13 +7,15 @@ import importlib
 import pkgutil
 import sys
 from collections.abc import Sequence
+from datetime import datetime
 
 from sqlalchemy.exc import IntegrityError
 
+from core.database import get_sessionmaker
+from core.errors import DepotError
+from core.settings import get_settings
 from service import commands
-from service.database import get_sessionmaker
-from service.errors import DepotError
-from service.settings import get_settings
+from service.commands._common import fail
 
 
 def _serve(args: argparse.Namespace) -> int:
@@ -44,12 +46,73 @@ def _migrate(_: argparse.Namespace) -> int:
 
 
 def _user_add(args: argparse.Namespace) -> int:
-    from service.setup.service import create_user
+    from service.setup.credentials import add_user
 
     with get_sessionmaker().begin() as session:
-        token = create_user(session, args.name, args.role)
+        _, token = add_user(
+            session, args.name, args.role, actor="cli", expires_in_days=args.expires_in_days
+        )
     print(f"user {args.name} ({args.role}) created. Token (shown once, store it now):")
     print(token)
+    return 0
+
+
+def _user_list(_: argparse.Namespace) -> int:
+    from service.setup.credentials import list_users
+
+    with get_sessionmaker().begin() as session:
+        users = list_users(session)
+        print(f"{'name':24s} {'role':11s} {'created (UTC)':17s} {'expires':17s} state")
+        for u in users:
+            state = "revoked" if u.revoked_at else "active"
+            print(
+                f"{u.name:24s} {u.role:11s} {_minute(u.created_at):17s}"
+                f" {_minute(u.expires_at) or 'never':17s} {state}"
+            )
+    return 0
+
+
+def _minute(at: datetime | None) -> str:
+    return "" if at is None else at.strftime("%Y-%m-%d %H:%M")
+
+
+def _user_rotate(args: argparse.Namespace) -> int:
+    from service.setup.credentials import rotate_user
+
+    with get_sessionmaker().begin() as session:
+        _, token = rotate_user(
+            session, args.name, actor="cli", expires_in_days=args.expires_in_days
+        )
+    print(f"new token for {args.name} (shown once; the old one stops working now):")
+    print(token)
+    return 0
+
+
+def _device_key(args: argparse.Namespace) -> int:
+    from service.setup.credentials import rotate_device_key
+
+    with get_sessionmaker().begin() as session:
+        _, key = rotate_device_key(session, args.device, actor="cli")
+    print(f"new key for device {args.device} (shown once; the old one stops working now):")
+    print(key)
+    return 0
+
+
+def _device_decommission(args: argparse.Namespace) -> int:
+    from service.setup.credentials import decommission_device
+
+    with get_sessionmaker().begin() as session:
+        decommission_device(session, args.device, actor="cli")
+    print(f"device {args.device} decommissioned: its events are refused; its history stays")
+    return 0
+
+
+def _user_revoke(args: argparse.Namespace) -> int:
+    from service.setup.credentials import revoke_user
+
+    with get_sessionmaker().begin() as session:
+        revoke_user(session, args.name, actor="cli")
+    print(f"user {args.name} revoked: their token stops working now")
     return 0
 
 
@@ -57,7 +120,7 @@ def _replay(_: argparse.Namespace) -> int:
     from service import features
     from service.replay import replay
 
-    assert features.LOADED
+    features.install()
     with get_sessionmaker().begin() as session:
         counts = replay(session)
     print(
@@ -94,7 +157,31 @@ def build_parser() -> argparse.ArgumentParser:
     add = user.add_parser("add", help="add a person; prints their token once")
     add.add_argument("name")
     add.add_argument("--role", required=True, choices=("dispatcher", "engineer"))
+    add.add_argument(
+        "--expires-in-days", type=float, default=None, help="token lifetime (default: no expiry)"
+    )
     add.set_defaults(func=_user_add)
+    user.add_parser("list", help="list people, their roles and token state").set_defaults(
+        func=_user_list
+    )
+    rotate = user.add_parser("rotate", help="a new token for NAME (prints it once)")
+    rotate.add_argument("name")
+    rotate.add_argument(
+        "--expires-in-days", type=float, default=None, help="token lifetime (default: no expiry)"
+    )
+    rotate.set_defaults(func=_user_rotate)
+    revoke = user.add_parser("revoke", help="NAME's token stops working at once")
+    revoke.add_argument("name")
+    revoke.set_defaults(func=_user_revoke)
+    device = sub.add_parser("device", help="rotate a device key or decommission a device")
+    device_sub = device.add_subparsers(dest="device_command", metavar="ACTION")
+    for action, func, text in (
+        ("key", _device_key, "a new key for DEVICE (prints it once; the old one stops)"),
+        ("decommission", _device_decommission, "refuse DEVICE's events from now on"),
+    ):
+        parser_ = device_sub.add_parser(action, help=text)
+        parser_.add_argument("device")
+        parser_.set_defaults(func=func)
     demo = sub.add_parser("demo", help="load the demo line and a simulated day of traffic")
     demo.add_argument("--force", action="store_true", help="load even if data is already there")
     demo.set_defaults(func=_demo)
@@ -117,11 +204,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args))
     except DepotError as exc:
-        print(f"depot: {exc.detail}", file=sys.stderr)
-        return 2
+        return fail(exc.detail)
     except IntegrityError as exc:
-        print(f"depot: the database refused the change ({exc.orig})", file=sys.stderr)
-        return 2
+        return fail(f"the database refused the change ({exc.orig})")
 
 
 if __name__ == "__main__":

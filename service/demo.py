@@ -3,7 +3,9 @@
 Three stations, two single-track sections (AB primary, BC auxiliary), a camera, an infrared
 reader, a wheel-mark reader and an axle counter at each end of each section, an interlocking per
 station, a registered fleet; then a day of runs ending now, including a train that loses its
-last two cars, an arrival photographed at night with a weak disc, and a reader gone silent.
+last two cars, an arrival photographed at night with a weak disc, and a reader gone silent;
+a train carrying an end-of-train (EOT) unit whose radio reports the brake pipe at pressure on
+arrival, and an arrival the camera missed, cleared by the next train sweeping the section.
 """
 
 from __future__ import annotations
@@ -17,11 +19,11 @@ import numpy as np
 from fastapi.testclient import TestClient
 from sqlalchemy import select
 
+from core.database import get_sessionmaker
+from core.models import Station
+from core.settings import get_settings
 from identification.simulate import ir_pulses_passage, wheel_mark_passage
-from service.database import get_sessionmaker
 from service.fleet.demo import load_fleet_history
-from service.settings import get_settings
-from service.setup.models import Station
 from tail_check.synth import render_snapshot
 
 STATIONS = (("A", "Anan'iv"), ("B", "Birzula"), ("C", "Podilsk"))
@@ -31,7 +33,10 @@ END_KINDS = (
     ("ir", "ir_reader"),
     ("wm", "wheel_mark_reader"),
     ("ac", "axle_counter"),
+    ("eot", "eot_receiver"),
 )
+# A real EOT packet (shared/data/real/eot_radio, PROVENANCE): unit 39572, 89 psig, marker on.
+EOT_PACKET = "11100010010111100000101001010110010100110101001011101011011001110010101001"
 FLEET = [f"0{n}" for n in range(101, 141)]
 
 
@@ -46,6 +51,8 @@ class Trip:
     lose: int = 0
     arrival_condition: str = "day"
     weak_disc: bool = False
+    arrival_image: bool = True
+    eot_unit: int | None = None
 
 
 @dataclass
@@ -182,20 +189,42 @@ class DemoLine:
             disc=True,
             condition="day",
         )
+        armed = {} if trip.eot_unit is None else {"eot_unit": trip.eot_unit}
         self.post(
-            f"{trip.origin}-ilk", "train_departed", start, section=trip.section, train=trip.train
+            f"{trip.origin}-ilk",
+            "train_departed",
+            start,
+            section=trip.section,
+            train=trip.train,
+            **armed,
         )
         arrives = start + timedelta(minutes=24)
         self.heartbeats(arrives - timedelta(seconds=90))
         arrived_cars = trip.cars[: len(trip.cars) - trip.lose]
         self.read_cars(trip.destination, trip, arrived_cars, arrives - timedelta(seconds=60))
-        self.snapshot(
-            f"{trip.destination}-{trip.section}-cam",
-            arrives - timedelta(seconds=5),
-            disc=trip.lose == 0,
-            condition=trip.arrival_condition,
-            weak=trip.weak_disc,
-        )
+        if trip.eot_unit is not None:
+            self.post(
+                f"{trip.destination}-{trip.section}-eot",
+                "eot_status",
+                arrives - timedelta(seconds=20),
+                section=trip.section,
+                unit_address=trip.eot_unit,
+                pressure_psig=89,
+                # the real packet's bits when the unit is the recorded one (the service checks)
+                **(
+                    {"marker_light": True, "motion": False, "bits": EOT_PACKET}
+                    if trip.eot_unit == 39572
+                    else {}
+                ),
+            )
+        if trip.arrival_image:
+            self.snapshot(
+                f"{trip.destination}-{trip.section}-cam",
+                arrives - timedelta(seconds=5),
+                disc=trip.lose == 0,
+                condition=trip.arrival_condition,
+                weak=trip.weak_disc,
+            )
         self.heartbeats(arrives - timedelta(seconds=2))
         self.post(
             f"{trip.destination}-ilk",
@@ -205,13 +234,13 @@ class DemoLine:
             train=trip.train,
         )
 
-    def settle(self, section: str, reason: str) -> None:
-        """A dispatcher clears a section left waiting (auxiliary mode, or a doubt looked at)."""
+    def settle(self, section: str, reason: str, *, action: str = "clear") -> None:
+        """A dispatcher clears a section left waiting (auxiliary mode, or a doubt looked at),
+        or (``action="sweep"``) lets the next train prove it empty."""
         current = self.client.get(f"/api/v1/sections/{section}", headers=self.admin).json()
         run = current["run"]
         if current["state"] == "free" or run is None:
             return
-        action = "clear"
         response = self.client.post(
             f"/api/v1/runs/{run['id']}/decision",
             json={"action": action, "reason": reason},
@@ -224,10 +253,17 @@ class DemoLine:
 
 
 def day_of_traffic(line: DemoLine, end: datetime) -> None:
-    """Six runs; the day ends with AB in alarm (lost cars) and BC in review (a silent reader)."""
+    """Eight runs; the day ends with AB in alarm (lost cars) and BC in review (a silent reader).
+
+    Early on: train 2041 carries EOT unit 39572, whose report at arrival joins the evidence;
+    the camera misses 2039's arrival, the dispatcher asks for a sweep, and 2042 (the sweep run)
+    arrives complete and clears it.
+    """
     t = end - timedelta(hours=6)
     cars = FLEET
-    line.run(Trip("AB", "A", "B", "2041", cars[0:8], t))
+    line.run(Trip("AB", "A", "B", "2041", cars[0:8], t - timedelta(hours=2), eot_unit=39572))
+    line.run(Trip("AB", "B", "A", "2039", cars[8:14], t - timedelta(hours=1), arrival_image=False))
+    line.settle("AB", "the camera missed the last car; the next train sweeps AB", action="sweep")
     line.run(
         Trip("AB", "B", "A", "2042", cars[8:14], t + timedelta(hours=1), arrival_condition="dusk")
     )
@@ -270,7 +306,7 @@ def load_demo(*, force: bool = False, fleet: bool = True) -> int:
         }
     print(
         f"demo: loaded {len(STATIONS)} stations, {len(line.keys)} devices,"
-        f" {len(FLEET)} cars, 6 runs;"
+        f" {len(FLEET)} cars, 8 runs (one EOT-equipped, one sweep);"
         f" section states {states}"
     )
     return 0

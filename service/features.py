@@ -1,15 +1,37 @@
-"""Importing this module registers every feature's event handlers with ingest."""
+"""The handler table: which feature derives state from which device event.
 
-from types import ModuleType
+This is the one place where ingest meets the features (cosmicpython's explicit handler
+table). A new event kind is a model in ``ingest/schemas.py`` (with its ``senders``) and a
+line here; `install` refuses to start when a kind has no entry.
+"""
 
-from service.clearance import handlers as clearance_handlers
-from service.clearance import tail as clearance_tail
-from service.fleet import handlers as fleet_handlers
-from service.trains import handlers as train_handlers
+from __future__ import annotations
 
-LOADED: tuple[ModuleType, ...] = (
-    clearance_handlers,
-    clearance_tail,
-    fleet_handlers,
-    train_handlers,
-)
+from ingest import handlers as ingest_handlers
+from ingest import schemas as ev
+from ingest.handlers import HandlerTable
+from service.clearance import handlers as clearance
+from service.clearance import tail
+from service.fleet import handlers as fleet
+from service.trains import handlers as trains
+
+HANDLER_TABLE: HandlerTable = {
+    ev.TrainDeparted: (clearance.train_departed,),
+    ev.TrainArrived: (clearance.train_arrived,),
+    ev.AxleCount: (clearance.axle_count,),
+    ev.IrId: (clearance.car_passage,),
+    ev.IrPulses: (clearance.car_passage,),
+    ev.IrManchester: (clearance.car_passage,),
+    ev.WheelMarks: (clearance.car_passage,),
+    ev.WheelMarksWritten: (clearance.wheel_marks_written,),
+    ev.TailSnapshot: (tail.tail_snapshot,),
+    ev.Measurement: (fleet.measurement,),
+    ev.MotionSample: (trains.motion_sample,),
+    ev.EotStatus: (clearance.eot_status,),
+    ev.Heartbeat: (),  # liveness only
+}
+
+
+def install() -> None:
+    """Install the table into ingest (idempotent); called by the app factory and the CLI."""
+    ingest_handlers.install(HANDLER_TABLE)

@@ -6,26 +6,41 @@ from typing import Any
 
 from fastapi import APIRouter
 from fastapi.responses import JSONResponse
+from pydantic import BaseModel, Field
 from sqlalchemy import text
 
-from service.database import DbSession
+from core.database import DbSession
 from service.migrate import current_revision, head_revision
 
 router = APIRouter(tags=["health"])
 
 
-@router.get("/healthz")
-def healthz() -> dict[str, str]:
-    return {"status": "ok"}
+class HealthOut(BaseModel):
+    status: str = Field(description="ok while the process answers")
 
 
-@router.get("/readyz")
+class ReadyOut(BaseModel):
+    status: str = Field(description="ready, or unavailable (503)")
+    revision: str | None = Field(default=None, description="the schema's Alembic revision")
+    detail: str | None = Field(default=None, description="why it is unavailable, and the fix")
+
+
+@router.get("/healthz", response_model=HealthOut)
+def healthz() -> HealthOut:
+    return HealthOut(status="ok")
+
+
+@router.get(
+    "/readyz",
+    response_model=ReadyOut,
+    responses={503: {"model": ReadyOut, "description": "database unreachable or schema behind"}},
+)
 def readyz(session: DbSession) -> Any:
     try:
         connection = session.connection()
         connection.execute(text("SELECT 1"))
         revision = current_revision(connection)
-    except Exception as exc:  # noqa: BLE001 - any database failure means "not ready"
+    except Exception as exc:
         return JSONResponse(
             {"status": "unavailable", "detail": f"database unreachable: {type(exc).__name__}"},
             status_code=503,
@@ -40,4 +55,4 @@ def readyz(session: DbSession) -> Any:
             },
             status_code=503,
         )
-    return {"status": "ready", "revision": revision}
+    return ReadyOut(status="ready", revision=revision)

@@ -1,10 +1,10 @@
 """Every table, imported in one place so that Alembic and replay see the whole schema."""
 
+from core.database import Base
+from core.models import Car, CredentialChange, Device, Section, Station, User
 from ingest.models import RawEvent, Snapshot
 from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run, WheelMarking
-from service.database import Base
 from service.fleet.models import Forecast, MaintenanceOverride, Measurement, Parameter
-from service.setup.models import Car, Device, Section, Station, User
 from service.trains.models import TrackMarker, TrainPosition
 
 metadata = Base.metadata
@@ -14,6 +14,7 @@ __all__ = [
     "AxleReading",
     "Car",
     "CarPassage",
+    "CredentialChange",
     "Device",
     "Forecast",
     "MaintenanceOverride",

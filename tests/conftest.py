@@ -13,9 +13,9 @@ from fastapi.testclient import TestClient
 from sqlalchemy import Engine, text
 from sqlalchemy.orm import Session, sessionmaker
 
-from service.database import get_session, make_engine
+from core.database import get_session, make_engine
+from core.settings import get_settings
 from service.migrate import upgrade
-from service.settings import get_settings
 
 ADMIN_TOKEN = "test-admin-token-0123456789abcdef"
 POSTGRES_URL = os.environ.get("DEPOT_TEST_POSTGRES_URL")

@@ -9,12 +9,19 @@ from typing import Any
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
+from core.models import Car, Device, Section
+from core.settings import get_settings
 from identification.consist import compare_consists
 from ingest.models import RawEvent, Snapshot
-from service.clearance.models import AxleReading, CarPassage, Run
-from service.clearance.rules import ConsistEvidence, RunEvidence, TailEvidence
-from service.settings import get_settings
-from service.setup.models import Car, Device, Section
+from service.clearance.models import AxleReading, CarPassage, EotReport, Run
+from service.clearance.rules import (
+    ConsistEvidence,
+    EotEvidence,
+    EotReading,
+    RunEvidence,
+    TailEvidence,
+    eot_stands_in,
+)
 from service.setup.service import section_devices
 from tail_check.profile import CameraProfile
 
@@ -23,6 +30,8 @@ from tail_check.profile import CameraProfile
 EVIDENCE_WINDOW = timedelta(minutes=10)
 EVIDENCE_DEVICE_KINDS = ("camera", "wheel_mark_reader", "ir_reader", "axle_counter")
 DEFAULT_ABSENT_CONFIDENCE = CameraProfile().absent_confidence
+# An EOT report counts for the run between departure and this long after arrival (clearance.md).
+EOT_AFTER_ARRIVAL = timedelta(seconds=60)
 
 
 def run_at(session: Session, section: str, at: datetime) -> Run | None:
@@ -57,11 +66,17 @@ def last_seen_before(session: Session, device_id: str, at: datetime) -> datetime
     )
 
 
-def stale_devices(session: Session, section: Section, station: str, at: datetime) -> list[str]:
+def stale_devices(
+    session: Session,
+    section: Section,
+    station: str,
+    at: datetime,
+    kinds: tuple[str, ...] = EVIDENCE_DEVICE_KINDS,
+) -> list[str]:
     limit = timedelta(seconds=get_settings().heartbeat_s)
     stale = []
     for device in section_devices(session, section, station):
-        if device.kind not in EVIDENCE_DEVICE_KINDS:
+        if device.kind not in kinds:
             continue
         seen = last_seen_before(session, device.id, at)
         if seen is None or at - seen > limit:
@@ -133,6 +148,47 @@ def _axles(
     return None if any(c is None for c in cars) else sum(c.axles for c in cars if c is not None)
 
 
+def _eot(session: Session, run: Run, stale: set[str]) -> tuple[EotEvidence | None, list[EotReport]]:
+    """Arrival-side EOT reports from departure to arrival + 60 s, oldest first."""
+    rows = [
+        r
+        for r in session.scalars(
+            select(EotReport)
+            .where(EotReport.run_id == run.id, EotReport.side == "arrival")
+            .order_by(EotReport.occurred_at, EotReport.id)
+        )
+        if r.device_id not in stale
+        and r.occurred_at >= run.departed_at
+        and (run.arrived_at is None or r.occurred_at <= run.arrived_at + EOT_AFTER_ARRIVAL)
+    ]
+    if run.eot_unit is None and not rows:
+        return None, rows
+    readings = tuple(EotReading(r.unit_address, r.pressure_psig) for r in rows)
+    return EotEvidence(unit=run.eot_unit, reports=readings), rows
+
+
+def _eot_summary(evidence: RunEvidence, rows: list[EotReport]) -> dict[str, Any] | None:
+    if evidence.eot is None:
+        return None
+    return {
+        "unit": evidence.eot.unit,
+        "stands_in_for_tail": eot_stands_in(evidence),
+        "reports": [
+            {
+                "id": r.id,
+                "device": r.device_id,
+                "occurred_at": r.occurred_at.isoformat().replace("+00:00", "Z"),
+                "unit_address": r.unit_address,
+                "pressure_psig": r.pressure_psig,
+                "motion": r.motion,
+                "marker_light": r.marker_light,
+                "own_unit": r.unit_address == evidence.eot.unit,
+            }
+            for r in rows
+        ],
+    }
+
+
 @dataclass(frozen=True)
 class Gathered:
     evidence: RunEvidence
@@ -144,6 +200,8 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
     at = run.arrived_at or run.departed_at
     stale = set(stale_devices(session, section, run.to_station, at))
     stale |= set(stale_devices(session, section, run.from_station, run.departed_at))
+    if run.eot_unit is not None:  # the receiver's silence matters only for EOT-equipped trains
+        stale |= set(stale_devices(session, section, run.to_station, at, ("eot_receiver",)))
     snapshots = [
         s
         for s in session.scalars(select(Snapshot).where(Snapshot.run_id == run.id))
@@ -162,6 +220,7 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
     families = consists(passages)
     consist, shown = compare_families(families)
     best = families.get("wheel") or families.get("ir") or {}
+    eot, eot_rows = _eot(session, run, stale)
     evidence = RunEvidence(
         arrival_tail=_tail(snapshots, "arrival"),
         departure_tail=_tail(snapshots, "departure"),
@@ -169,6 +228,7 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         departure_axles=_axles(session, readings, "departure", best.get("departure")),
         arrival_axles=_axles(session, readings, "arrival", best.get("arrival")),
         stale_devices=tuple(sorted(stale)),
+        eot=eot,
     )
     summary = {
         "tail": {
@@ -192,6 +252,7 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         "axles": {"departure": evidence.departure_axles, "arrival": evidence.arrival_axles},
         "stale_devices": sorted(stale),
         "snapshot_ids": sorted(s.id for s in snapshots),
+        "eot": _eot_summary(evidence, eot_rows),
     }
     return Gathered(evidence, summary)
 

@@ -6,30 +6,33 @@ from typing import Any
 
 from sqlalchemy import select
 
+from core.models import Car
 from identification import manchester, time_pulse, wheel_marks
 from identification.consist import majority_number
-from ingest.handlers import Derivation, handles
+from ingest.handlers import Derivation
 from service.clearance import service
-from service.clearance.models import AxleReading, CarPassage, WheelMarking
-from service.setup.models import Car
+from service.clearance.models import AxleReading, CarPassage, EotReport, WheelMarking
 
 
-@handles("train_departed")
-def _departed(d: Derivation) -> dict[str, Any]:
+def train_departed(d: Derivation) -> dict[str, Any]:
     return service.open_run(
-        d.session, d.raw.id, d.event.section, d.device.station, d.event.train, d.event.occurred_at
+        d.session,
+        d.raw.id,
+        d.event.section,
+        d.device.station,
+        d.event.train,
+        d.event.occurred_at,
+        eot_unit=d.event.eot_unit,
     )
 
 
-@handles("train_arrived")
-def _arrived(d: Derivation) -> dict[str, Any]:
+def train_arrived(d: Derivation) -> dict[str, Any]:
     return service.close_run(
         d.session, d.event.section, d.device.station, d.event.train, d.event.occurred_at
     )
 
 
-@handles("axle_count")
-def _axles(d: Derivation) -> dict[str, Any]:
+def axle_count(d: Derivation) -> dict[str, Any]:
     row = AxleReading(
         id=d.raw.id,
         device_id=d.device.id,
@@ -40,6 +43,25 @@ def _axles(d: Derivation) -> dict[str, Any]:
     )
     d.session.add(row)
     return service.attach(d.session, row, d.event.section, d.device.station, d.event.occurred_at)
+
+
+def eot_status(d: Derivation) -> dict[str, Any]:
+    e = d.event
+    row = EotReport(
+        id=d.raw.id,
+        device_id=d.device.id,
+        station=d.device.station,
+        section=e.section,
+        occurred_at=e.occurred_at,
+        unit_address=e.unit_address,
+        pressure_psig=e.pressure_psig,
+        motion=e.motion,
+        marker_light=e.marker_light,
+        battery_charge=e.battery_charge,
+        bits=e.bits,
+    )
+    d.session.add(row)
+    return service.attach(d.session, row, e.section, d.device.station, e.occurred_at)
 
 
 def _decode_ir_pulses(event: Any) -> tuple[int | None, dict[str, Any]]:
@@ -80,8 +102,7 @@ DECODERS = {
 }
 
 
-@handles("ir_id", "ir_pulses", "ir_manchester", "wheel_marks")
-def _passage(d: Derivation) -> dict[str, Any]:
+def car_passage(d: Derivation) -> dict[str, Any]:
     number, detail = DECODERS[d.event.kind](d.event)
     column = Car.wheel_code if d.event.kind == "wheel_marks" else Car.ir_number
     car_id = None if number is None else d.session.scalar(select(Car.id).where(column == number))
@@ -103,8 +124,7 @@ def _passage(d: Derivation) -> dict[str, Any]:
     return {"car_number": number, "car": car_id, **attached}
 
 
-@handles("wheel_marks_written")
-def _marked(d: Derivation) -> dict[str, Any]:
+def wheel_marks_written(d: Derivation) -> dict[str, Any]:
     car = d.session.get(Car, d.event.car)
     result = wheel_marks.simulate_marking(d.event.detections, axles=car.axles if car else 4)
     faults = list(result.faults) + ([] if car else [f"car {d.event.car} is not registered"])

@@ -8,8 +8,8 @@ from typing import Any
 from sqlalchemy import JSON, Boolean, ForeignKey, Integer, String, Text
 from sqlalchemy.orm import Mapped, mapped_column
 
+from core.database import Base, UTCDateTime, utcnow
 from ingest.models import BigId
-from service.database import Base, UTCDateTime, utcnow
 
 
 class Run(Base):
@@ -31,6 +31,33 @@ class Run(Base):
     auto: Mapped[bool] = mapped_column(Boolean, default=True)
     decided_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
     evidence: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
+    # Clear after a sweep train: a sweep run has ``sweep`` and the run it sweeps in
+    # ``sweep_of``; that run gets ``cleared_by`` when the sweep run is decided complete.
+    sweep: Mapped[bool] = mapped_column(Boolean, default=False)
+    sweep_of: Mapped[int | None] = mapped_column(BigId, nullable=True)
+    cleared_by: Mapped[int | None] = mapped_column(BigId, nullable=True)
+    # The EOT unit address armed on this train (``train_departed.eot_unit``), if any.
+    eot_unit: Mapped[int | None] = mapped_column(Integer, nullable=True)
+
+
+class EotReport(Base):
+    """One ``eot_status`` report of an EOT radio receiver (same id as its event)."""
+
+    __tablename__ = "eot_reports"
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=False)
+    device_id: Mapped[str] = mapped_column(ForeignKey("devices.id"))
+    station: Mapped[str] = mapped_column(String(32))
+    section: Mapped[str] = mapped_column(String(32), index=True)
+    occurred_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    unit_address: Mapped[int] = mapped_column(Integer)
+    pressure_psig: Mapped[int] = mapped_column(Integer)
+    motion: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
+    marker_light: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
+    battery_charge: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    bits: Mapped[str | None] = mapped_column(String(74), nullable=True)
+    run_id: Mapped[int | None] = mapped_column(BigId, nullable=True, index=True)
+    side: Mapped[str | None] = mapped_column(String(16), nullable=True)
 
 
 class CarPassage(Base):

@@ -9,17 +9,26 @@ from fastapi.responses import FileResponse, Response
 from sqlalchemy import or_, select
 
 import tail_check
+from core.auth import CurrentDispatcher, CurrentReader
+from core.database import DbSession, utcnow
+from core.errors import NotFound
+from core.models import Section
 from ingest.models import Snapshot
 from ingest.snapshots import load_bgr
-from service.auth import CurrentDispatcher, CurrentReader
 from service.clearance import service
 from service.clearance.models import AuditRecord, Run, WheelMarking
+from service.clearance.responses import (
+    AuditOut,
+    DecisionAnswer,
+    RunOut,
+    RunsPage,
+    SectionOut,
+    SnapshotMetaOut,
+    WheelMarkingOut,
+)
 from service.clearance.schemas import DecisionIn
 from service.clearance.tail import camera_profile, snapshot_file
 from service.clearance.views import audit_out, run_out, section_out
-from service.database import DbSession, utcnow
-from service.errors import NotFound
-from service.setup.models import Section
 
 router = APIRouter(tags=["dispatcher"])
 MAX_ROW_ID = 2**63 - 1
@@ -27,12 +36,12 @@ RunId = Annotated[int, Path(ge=1, le=MAX_ROW_ID, description="run id")]
 SnapshotId = Annotated[int, Path(ge=1, le=MAX_ROW_ID, description="snapshot id")]
 
 
-@router.get("/sections")
+@router.get("/sections", response_model=list[SectionOut])
 def list_sections(session: DbSession, _: CurrentReader) -> list[dict[str, Any]]:
     return [section_out(session, s) for s in session.scalars(select(Section).order_by(Section.id))]
 
 
-@router.get("/sections/{section_id}")
+@router.get("/sections/{section_id}", response_model=SectionOut)
 def get_section(section_id: str, session: DbSession, _: CurrentReader) -> dict[str, Any]:
     section = session.get(Section, section_id)
     if section is None:
@@ -40,7 +49,7 @@ def get_section(section_id: str, session: DbSession, _: CurrentReader) -> dict[s
     return section_out(session, section)
 
 
-@router.get("/runs")
+@router.get("/runs", response_model=RunsPage)
 def list_runs(
     session: DbSession,
     _: CurrentReader,
@@ -68,7 +77,7 @@ def list_runs(
     }
 
 
-@router.get("/runs/{run_id}")
+@router.get("/runs/{run_id}", response_model=RunOut)
 def get_run(run_id: RunId, session: DbSession, _: CurrentReader) -> dict[str, Any]:
     run = session.get(Run, run_id)
     if run is None:
@@ -77,7 +86,9 @@ def get_run(run_id: RunId, session: DbSession, _: CurrentReader) -> dict[str, An
 
 
 @router.post(
-    "/runs/{run_id}/decision", responses={409: {"description": "not current or not arrived"}}
+    "/runs/{run_id}/decision",
+    response_model=DecisionAnswer,
+    responses={409: {"description": "not current or not arrived"}},
 )
 def decide_run(
     run_id: RunId, body: DecisionIn, session: DbSession, who: CurrentDispatcher
@@ -92,7 +103,7 @@ def decide_run(
     }
 
 
-@router.get("/audit")
+@router.get("/audit", response_model=list[AuditOut])
 def list_audit(
     session: DbSession,
     _: CurrentReader,
@@ -122,7 +133,7 @@ def get_snapshot_image(snapshot_id: SnapshotId, session: DbSession, _: CurrentRe
     )
 
 
-@router.get("/snapshots/{snapshot_id}/meta")
+@router.get("/snapshots/{snapshot_id}/meta", response_model=SnapshotMetaOut)
 def get_snapshot_meta(
     snapshot_id: SnapshotId, session: DbSession, _: CurrentReader
 ) -> dict[str, Any]:
@@ -158,7 +169,7 @@ def get_snapshot_overlay(snapshot_id: SnapshotId, session: DbSession, _: Current
     )
 
 
-@router.get("/cars/{car_id}/wheel-markings")
+@router.get("/cars/{car_id}/wheel-markings", response_model=list[WheelMarkingOut])
 def list_wheel_markings(car_id: str, session: DbSession, _: CurrentReader) -> list[dict[str, Any]]:
     """The marking station's results for a car: per axle written or not, state, faults."""
     rows = session.scalars(

@@ -41,6 +41,43 @@ class ConsistEvidence:
 
 
 @dataclass(frozen=True)
+class EotThresholds:
+    """Brake-pipe pressures at the rear (psig) that the EOT rules read (clearance.md, EOT).
+
+    Attributes
+    ----------
+    whole_psig
+        At or above: the brake pipe reaches the last car at pressure, so the train is whole up
+        to the EOT unit; stands in for the arrival tail disc in rule 2.
+    vented_psig
+        Below: the pipe is vented at the rear, the classic sign of a parted train (rule 1).
+    """
+
+    whole_psig: int = 45
+    vented_psig: int = 5
+
+
+EOT = EotThresholds()
+
+
+@dataclass(frozen=True)
+class EotReading:
+    """One arrival-side ``eot_status`` report in the run's window, as the rules see it."""
+
+    unit_address: int
+    pressure_psig: int
+
+
+@dataclass(frozen=True)
+class EotEvidence:
+    """The EOT unit armed on the train (``train_departed.eot_unit``, or None) and the
+    arrival-side reports between departure and arrival + 60 s, oldest first."""
+
+    unit: int | None
+    reports: tuple[EotReading, ...] = ()
+
+
+@dataclass(frozen=True)
 class RunEvidence:
     arrival_tail: TailEvidence | None = None
     departure_tail: TailEvidence | None = None
@@ -48,6 +85,38 @@ class RunEvidence:
     departure_axles: int | None = None
     arrival_axles: int | None = None
     stale_devices: tuple[str, ...] = field(default_factory=tuple)
+    eot: EotEvidence | None = None
+
+
+def _eot_last(evidence: RunEvidence) -> EotReading | None:
+    """The last report of the train's own EOT unit (reports of other units do not count)."""
+    eot = evidence.eot
+    if eot is None or eot.unit is None:
+        return None
+    own = [r for r in eot.reports if r.unit_address == eot.unit]
+    return own[-1] if own else None
+
+
+def eot_stands_in(evidence: RunEvidence) -> bool:
+    """Whether the train's own EOT unit proves the last car arrived (≥ 45 psig at the rear)."""
+    last = _eot_last(evidence)
+    return last is not None and last.pressure_psig >= EOT.whole_psig
+
+
+def _eot_ignored(evidence: RunEvidence) -> list[str]:
+    """Reports from other unit addresses: ignored, each unit once, with the reason."""
+    eot = evidence.eot
+    if eot is None:
+        return []
+    others = sorted({r.unit_address for r in eot.reports if r.unit_address != eot.unit})
+    if eot.unit is None:
+        return [
+            f"EOT unit {u} reported, but no EOT unit was armed on this train: ignored"
+            for u in others
+        ]
+    return [
+        f"EOT unit {u} is not this train's unit ({eot.unit}): its report is ignored" for u in others
+    ]
 
 
 @dataclass(frozen=True)
@@ -75,6 +144,12 @@ def _losses(evidence: RunEvidence) -> list[str]:
         found.append(
             f"{a_axles} axles arrived of {d_axles} that departed ({d_axles - a_axles} missing)"
         )
+    last = _eot_last(evidence)
+    if last is not None and last.pressure_psig < EOT.vented_psig:
+        found.append(
+            "brake pipe vented at the rear: the train may have parted"
+            f" (EOT unit {last.unit_address} reports {last.pressure_psig} psig)"
+        )
     return found
 
 
@@ -82,9 +157,15 @@ def _doubts(evidence: RunEvidence) -> list[str]:
     """What keeps rule 2 from proving completeness (each is a reason for a person to look)."""
     doubts: list[str] = []
     arrival = evidence.arrival_tail
-    if arrival is None:
+    stand_in = eot_stands_in(evidence)
+    if arrival is None and not stand_in:
         doubts.append("no arrival image of the last car")
-    elif arrival.verdict == "uncertain":
+        eot = evidence.eot
+        if eot is not None and eot.unit is not None and _eot_last(evidence) is None:
+            doubts.append(f"no report from EOT unit {eot.unit} at arrival")
+    elif arrival is None:
+        pass  # the EOT unit at pressure stands in for the tail disc (rule 2)
+    elif arrival.verdict == "uncertain" and not stand_in:
         doubts.append(
             f"the tail disc on the arrival image is uncertain (score {arrival.score:.2f})"
         )
@@ -102,13 +183,29 @@ def _doubts(evidence: RunEvidence) -> list[str]:
         doubts.append(
             f"device {device} is silent past its heartbeat deadline; its evidence is missing"
         )
+    last = _eot_last(evidence)
+    if last is not None and EOT.vented_psig <= last.pressure_psig < EOT.whole_psig:
+        doubts.append(
+            f"EOT unit {last.unit_address} at the rear reports only {last.pressure_psig} psig"
+            f" at arrival ({EOT.whole_psig} psig or more proves the train whole)"
+        )
     return doubts
 
 
 def _agreements(evidence: RunEvidence) -> list[str]:
     agreed = []
-    if evidence.arrival_tail is not None:
-        agreed.append(f"tail disc present on arrival (score {evidence.arrival_tail.score:.2f})")
+    tail = evidence.arrival_tail
+    if tail is not None and tail.verdict == "present":
+        agreed.append(f"tail disc present on arrival (score {tail.score:.2f})")
+    elif tail is not None:
+        agreed.append(
+            f"the tail disc is {tail.verdict} (score {tail.score:.2f}); the EOT unit stands in"
+        )
+    last = _eot_last(evidence)
+    if last is not None:
+        agreed.append(
+            f"EOT unit {last.unit_address} at the rear reports {last.pressure_psig} psig at arrival"
+        )
     if evidence.consist is not None and evidence.consist.status == "identical":
         agreed.append(evidence.consist.reason)
     if evidence.departure_axles is not None and evidence.departure_axles == evidence.arrival_axles:
@@ -118,21 +215,67 @@ def _agreements(evidence: RunEvidence) -> list[str]:
 
 def decide(evidence: RunEvidence) -> Decision:
     """Apply the fixed rules: incomplete if anything proves loss; complete only if the arrival
-    tail disc is present and every item present agrees; otherwise undetermined.
+    tail disc is present (or the train's own EOT unit reports ≥ 45 psig at arrival, standing in
+    for it) and every item present agrees; otherwise undetermined. Reports of other EOT units
+    are ignored, with a reason. A weak ``absent`` tail stays a doubt even with the EOT at
+    pressure: an item that is present and does not agree.
 
     Parameters
     ----------
     evidence : RunEvidence
         What the run has, each item ``None`` when missing (stale devices' evidence is left out).
     """
+    ignored = _eot_ignored(evidence)
     losses = _losses(evidence)
     if losses:
-        return Decision("incomplete", tuple(losses))
+        return Decision("incomplete", (*losses, *ignored))
     doubts = _doubts(evidence)
     if doubts:
-        return Decision("undetermined", tuple(doubts))
-    return Decision("complete", tuple(_agreements(evidence)))
+        return Decision("undetermined", (*doubts, *ignored))
+    return Decision("complete", (*_agreements(evidence), *ignored))
 
 
 def section_state(verdict: Verdict, mode: str) -> str:
     return SECTION_STATE[(verdict, mode)]
+
+
+# A dispatcher may ask for a sweep only where nothing proves the section empty.
+SWEEP_FROM = frozenset({"alarm", "review", "blocked"})
+
+
+def next_state(current: str, verdict: Verdict, mode: str) -> str:
+    """Where the section goes after a (re-)decision of the run holding it.
+
+    Proof of loss always raises the alarm (even on a section already freed). Otherwise only the
+    states that wait for evidence follow the verdict: an alarm or a dispatcher's block is left
+    for a person, and a freed section is not closed again by mere doubt. A sweep run follows
+    the same table (clearance.md): ``complete`` frees (or awaits confirmation), ``incomplete``
+    raises the alarm, ``undetermined`` asks for review.
+    """
+    if verdict == "incomplete":
+        return current if current == "blocked" else "alarm"
+    if current in ("occupied", "review", "awaiting_confirmation"):
+        return section_state(verdict, mode)
+    return current
+
+
+def departure_opens_sweep(state: str) -> bool:
+    """A train departing into a section awaiting a sweep is the sweep run, not a conflict."""
+    return state == "awaiting_sweep"
+
+
+def sweep_clears_original(sweep_verdict: Verdict | None) -> bool:
+    """The original run counts as cleared by the sweep only when the sweep run is complete."""
+    return sweep_verdict == "complete"
+
+
+def describe_sweep(sweep_run: int, original: int, verdict: Verdict) -> str:
+    """The words shown for a sweep run's outcome."""
+    if verdict == "complete":
+        return f"sweep run {sweep_run} arrived complete: run {original}'s section is proved empty"
+    if verdict == "incomplete":
+        return f"sweep run {sweep_run} arrived incomplete: the section is in alarm again"
+    return (
+        f"sweep run {sweep_run} is undetermined:"
+        f" a person must look before run {original} is cleared"
+    )

@@ -11,5 +11,5 @@ from service.reasons import Reason
 
 class DecisionIn(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    action: Literal["clear", "keep_blocked"]
+    action: Literal["clear", "keep_blocked", "sweep"]
     reason: Reason

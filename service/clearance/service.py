@@ -5,26 +5,56 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import select, update
+from sqlalchemy import event, select, update
 from sqlalchemy.orm import Session
 
+from core.auth import Principal
+from core.database import utcnow
+from core.errors import Conflict, NotFound
+from core.models import Section
 from ingest.models import Snapshot
-from service.auth import Principal
 from service.clearance.evidence import EVIDENCE_WINDOW, gather, run_at, side_of
 from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run
-from service.clearance.rules import decide, section_state
-from service.errors import Conflict, NotFound
-from service.setup.models import Section
+from service.clearance.rules import (
+    SWEEP_FROM,
+    decide,
+    departure_opens_sweep,
+    describe_sweep,
+    next_state,
+    sweep_clears_original,
+)
 
-BUSY_STATES = ("occupied", "awaiting_confirmation", "review", "alarm", "blocked")
+BUSY_STATES = ("occupied", "awaiting_confirmation", "review", "alarm", "blocked", "awaiting_sweep")
+ACTION_STATES = {"clear": "free", "keep_blocked": "blocked", "sweep": "awaiting_sweep"}
+SYSTEM = Principal(role="system", name="depot")  # author of the audit records it writes itself
+
+
+LOCKED = "depot_locked_sections"
 
 
 def lock_section(session: Session, section_id: str) -> Section:
-    """The section row, locked for the transaction: one writer decides a section at a time."""
+    """The section row, locked for the transaction: one writer decides a section at a time.
+
+    Locked once per transaction: a group commit deriving many events of one section asks the
+    database once; the row in the session is current, as nobody else may change it meanwhile.
+    """
+    locked: set[str] = session.info.setdefault(LOCKED, set())
+    if section_id in locked:
+        held = session.get(Section, section_id)
+        if held is not None:
+            return held
     section = session.scalar(select(Section).where(Section.id == section_id).with_for_update())
     if section is None:
         raise NotFound(f"section {section_id!r} does not exist")
+    locked.add(section_id)
     return section
+
+
+@event.listens_for(Session, "after_soft_rollback")
+@event.listens_for(Session, "after_commit")
+def _locks_released(session: Session, *_: object) -> None:
+    # A commit ends the transaction; a rollback, even to a savepoint, may release the lock.
+    session.info.pop(LOCKED, None)
 
 
 def _set_state(section: Section, state: str, at: datetime) -> None:
@@ -34,9 +64,20 @@ def _set_state(section: Section, state: str, at: datetime) -> None:
 
 
 def open_run(
-    session: Session, run_id: int, section_id: str, station: str, train: str, at: datetime
+    session: Session,
+    run_id: int,
+    section_id: str,
+    station: str,
+    train: str,
+    at: datetime,
+    *,
+    eot_unit: int | None = None,
 ) -> dict[str, Any]:
-    """``train_departed``: the train takes the block, or a conflict is recorded and raised."""
+    """``train_departed``: the train takes the block, or a conflict is recorded and raised.
+
+    Into a section awaiting a sweep the train is the sweep run: no conflict, it holds the
+    section and remembers the run it sweeps.
+    """
     section = lock_section(session, section_id)
     run = Run(
         id=run_id,
@@ -49,8 +90,12 @@ def open_run(
         status="running",
         reasons=[],
         evidence={},
+        eot_unit=eot_unit,
+        sweep=False,
     )
-    if section.state in BUSY_STATES:
+    if departure_opens_sweep(section.state):
+        run.sweep, run.sweep_of = True, section.current_run_id
+    elif section.state in BUSY_STATES:
         holder = session.get(Run, section.current_run_id) if section.current_run_id else None
         run.status = "conflict"
         run.verdict = None
@@ -67,7 +112,10 @@ def open_run(
     _set_state(section, "occupied", at)
     adopted = adopt_departure_evidence(session, run)
     session.flush()
-    return {"run": run_id, "section_state": section.state, "adopted_evidence": adopted}
+    out: dict[str, Any] = {"run": run_id, "section_state": section.state}
+    if run.sweep:
+        out.update(sweep=True, sweep_of=run.sweep_of)
+    return {**out, "adopted_evidence": adopted}
 
 
 def adopt_departure_evidence(session: Session, run: Run) -> int:
@@ -118,20 +166,6 @@ def close_run(
     return evaluate(session, run, section, notes=notes)
 
 
-def _next_state(current: str, verdict: str, mode: str) -> str:
-    """Where the section goes after a (re-)decision of the run holding it.
-
-    Proof of loss always raises the alarm (even on a section already freed). Otherwise only the
-    states that wait for evidence follow the verdict: an alarm or a dispatcher's block is left
-    for a person, and a freed section is not closed again by mere doubt.
-    """
-    if verdict == "incomplete":
-        return current if current == "blocked" else "alarm"
-    if current in ("occupied", "review", "awaiting_confirmation"):
-        return section_state(verdict, mode)  # type: ignore[arg-type]
-    return current
-
-
 def evaluate(
     session: Session, run: Run, section: Section, *, notes: list[str] | None = None
 ) -> dict[str, Any]:
@@ -141,16 +175,63 @@ def evaluate(
     verdict, reasons = decision.verdict, [*decision.reasons, *(notes or [])]
     if notes and verdict == "complete":
         verdict = "undetermined"  # a mismatched train number needs a person's eyes
+    if run.sweep and run.sweep_of is not None:
+        reasons.append(describe_sweep(run.id, run.sweep_of, verdict))
     run.verdict, run.reasons, run.evidence = verdict, reasons, gathered.summary
     if run.decided_at is None:
         run.decided_at = run.arrived_at
     at = run.arrived_at or run.departed_at
+    if run.sweep and run.sweep_of is not None:
+        _record_sweep(session, run, section)
     if section.current_run_id == run.id:
-        _set_state(section, _next_state(section.state, verdict, section.mode), at)
+        _set_state(section, next_state(section.state, verdict, section.mode), at)
         if section.state == "free":
             promote_conflict(session, section, at)
     session.flush()
     return {"run": run.id, "verdict": verdict, "reasons": reasons, "section_state": section.state}
+
+
+def _record_sweep(session: Session, sweep: Run, section: Section) -> None:
+    """Link the swept run to its sweep run while (and only while) the sweep is complete.
+
+    The audit gets one record per sweep that cleared a run, with both runs and the sweep's
+    evidence; it is written once (a re-decision or a replay finds it and adds none).
+    """
+    original = session.get(Run, sweep.sweep_of) if sweep.sweep_of is not None else None
+    if original is None:
+        return
+    if not sweep_clears_original(sweep.verdict):  # type: ignore[arg-type]
+        if original.cleared_by == sweep.id:
+            original.cleared_by = None  # late evidence took the proof away
+        return
+    original.cleared_by = sweep.id
+    written = session.scalar(
+        select(AuditRecord.id).where(
+            AuditRecord.run_id == original.id, AuditRecord.action == "cleared_by_sweep"
+        )
+    )
+    if written is None:
+        session.add(
+            AuditRecord(
+                run_id=original.id,
+                section=section.id,
+                action="cleared_by_sweep",
+                reason=describe_sweep(sweep.id, original.id, "complete"),
+                actor=SYSTEM.name,
+                actor_role=SYSTEM.role,
+                recorded_at=utcnow(),  # when written, like every audit record
+                state_before="awaiting_sweep",
+                state_after=next_state("occupied", "complete", section.mode),
+                evidence={
+                    "swept_run_id": original.id,
+                    "sweep_run_id": sweep.id,
+                    "sweep_train": sweep.train,
+                    "sweep_verdict": sweep.verdict,
+                    "sweep_reasons": sweep.reasons,
+                    "sweep_evidence": sweep.evidence,
+                },
+            )
+        )
 
 
 def promote_conflict(session: Session, section: Section, at: datetime) -> None:
@@ -172,6 +253,10 @@ def attach(
     """Attach a piece of evidence to the run holding the section then; re-decide if arrived."""
     section = lock_section(session, section_id)
     run = run_at(session, section_id, at)
+    # Departure-side devices see a train before it leaves; after the run has arrived they
+    # are seeing the next train (a sweep train, say), which adopts their evidence on departure.
+    if run is not None and run.arrived_at is not None and at > run.arrived_at:
+        run = None if station == run.from_station else run
     if run is None:
         row.run_id, row.side = None, None
         session.flush()
@@ -193,7 +278,9 @@ def act(
     *,
     audit: bool = True,
 ) -> AuditRecord | None:
-    """A dispatcher's ``clear`` or ``keep_blocked`` on the section's current, arrived run."""
+    """A dispatcher's ``clear``, ``keep_blocked`` or ``sweep`` on the section's current, arrived
+    run. ``sweep`` only where nothing proves the section empty (alarm, review, blocked); a
+    ``clear`` of a section awaiting its sweep is audited as a force-clear."""
     run = session.get(Run, run_id)
     if run is None:
         raise NotFound(f"run {run_id} does not exist")
@@ -205,8 +292,13 @@ def act(
             f"run {run_id} has not arrived yet; the train is still in section {section.id}"
         )
     before = section.state
+    if action == "sweep" and before not in SWEEP_FROM:
+        raise Conflict(
+            f"section {section.id} is {before}: a sweep is asked for a section in alarm,"
+            " review or blocked"
+        )
     gathered = gather(session, run, section)
-    _set_state(section, "free" if action == "clear" else "blocked", at)
+    _set_state(section, ACTION_STATES[action], at)
     run.auto = False
     if action == "clear":
         promote_conflict(session, section, at)
@@ -222,7 +314,16 @@ def act(
             recorded_at=at,
             state_before=before,
             state_after=section.state,
-            evidence={"verdict": run.verdict, "reasons": run.reasons, **gathered.summary},
+            evidence={
+                "verdict": run.verdict,
+                "reasons": run.reasons,
+                **gathered.summary,
+                **(
+                    {"force_clear": True}
+                    if action == "clear" and before == "awaiting_sweep"
+                    else {}
+                ),
+            },
         )
         session.add(record)
     session.flush()

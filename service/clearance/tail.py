@@ -8,12 +8,12 @@ from typing import Any
 from sqlalchemy import select
 
 import tail_check
-from ingest.handlers import Derivation, handles
+from core.settings import get_settings
+from ingest.handlers import Derivation
 from ingest.models import Snapshot
 from ingest.snapshots import load_bgr, stored_image
 from service.clearance import service
 from service.clearance.evidence import run_at, side_of
-from service.settings import get_settings
 from tail_check.profile import CameraProfile
 
 
@@ -39,8 +39,7 @@ def _departure_reference(d: Derivation, run_id: int | None) -> Snapshot | None:
     )
 
 
-@handles("tail_snapshot")
-def _snapshot(d: Derivation) -> dict[str, Any]:
+def tail_snapshot(d: Derivation) -> dict[str, Any]:
     event = d.event
     row = Snapshot(
         id=d.raw.id,

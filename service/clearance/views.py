@@ -8,8 +8,8 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from core.models import Section
 from service.clearance.models import AuditRecord, Run
-from service.setup.models import Section
 
 QUEUE_STATES = ("alarm", "review", "awaiting_confirmation", "blocked")
 
@@ -47,6 +47,10 @@ def run_out(session: Session, run: Run) -> dict[str, Any]:
         "to_station": run.to_station,
         "departed_at": _iso(run.departed_at),
         "arrived_at": _iso(run.arrived_at),
+        "sweep": run.sweep,
+        "sweep_of": run.sweep_of,
+        "cleared_by": run.cleared_by,
+        "eot_unit": run.eot_unit,
         "evidence": run.evidence,
         "decision": None
         if run.verdict is None and run.status != "conflict"

@@ -8,8 +8,9 @@ import time
 from pathlib import Path
 from typing import Any, TextIO
 
-from service.database import get_sessionmaker
-from service.errors import DepotError
+from core.database import get_sessionmaker
+from core.errors import DepotError
+from service.commands._common import fail
 from service.fleet.schemas import WEIGHTS_METHODS
 
 
@@ -34,27 +35,25 @@ class ProgressBar:
         self.stream.flush()
 
 
-def _fail(message: str) -> int:
-    print(f"depot: {message}", file=sys.stderr)
-    return 2
-
-
 def _import(args: argparse.Namespace) -> int:
     from service.fleet.importing import import_tests, parse_tests
+    from service.fleet.rules import registered
 
     path = Path(args.file)
     if not path.is_file():
-        return _fail(f"{path} does not exist or is not a file; give the path of a CSV file")
+        return fail(f"{path} does not exist or is not a file; give the path of a CSV file")
     try:
-        with path.open(newline="", encoding="utf-8-sig") as stream:
-            tests = parse_tests(stream)
         with get_sessionmaker().begin() as session:
+            with path.open(newline="", encoding="utf-8-sig") as stream:
+                tests = parse_tests(stream, registered(session))
             count, rows = import_tests(session, tests)
     except UnicodeDecodeError:
-        return _fail(f"{path} is not UTF-8 text; export the CSV as UTF-8")
+        return fail(f"{path} is not UTF-8 text; export the CSV as UTF-8")
     except DepotError as exc:
-        return _fail(f"{path}: {exc.detail}")
-    print(f"imported {count} tests ({rows} measurements) from {path}")
+        return fail(f"{path}: {exc.detail}")
+    skipped = len(tests) - count
+    again = f"; {skipped} already stored, skipped" if skipped else ""
+    print(f"imported {count} tests ({rows} measurements) from {path}{again}")
     return 0
 
 
@@ -67,7 +66,7 @@ def _forecast(args: argparse.Namespace) -> int:
         with get_sessionmaker().begin() as session:
             run = run_forecasts(session, options, progress=ProgressBar(sys.stderr))
     except DepotError as exc:
-        return _fail(exc.detail)
+        return fail(exc.detail)
     elapsed = time.perf_counter() - started
     statuses = ", ".join(f"{n} {status}" for status, n in sorted(run.statuses.items()))
     print(f"forecast {run.cars} cars in {elapsed:.1f} s ({statuses or 'no cars registered'})")

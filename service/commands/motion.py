@@ -34,11 +34,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from pathlib import Path
 from typing import Any
 
 from motion import braking, optical
+from service.commands._common import fail
 from service.commands._motion_reports import render_histogram_png, tables
 
 __all__ = ["build_parser", "main", "register", "render_histogram_png"]
@@ -63,21 +63,16 @@ def _clean(obj: Any) -> Any:
     return obj
 
 
-def _err(msg: str) -> int:
-    print(f"error: {msg}", file=sys.stderr)
-    return 2
-
-
 # ------------------------------------------------------------------ optical-speed
 def _cmd_optical_speed(args: argparse.Namespace) -> int:
     import cv2
 
     path = Path(args.image)
     if not path.is_file():
-        return _err(f"no such image: {path} (give the path of a PNG or JPEG frame)")
+        return fail(f"no such image: {path} (give the path of a PNG or JPEG frame)")
     img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
     if img is None:
-        return _err(f"cannot read image: {path} (expected a PNG or JPEG file)")
+        return fail(f"cannot read image: {path} (expected a PNG or JPEG file)")
     try:
         r = optical.speed_from_image(
             img,
@@ -88,7 +83,7 @@ def _cmd_optical_speed(args: argparse.Namespace) -> int:
             pixel_error_rad=args.pixel_error,
         )
     except ValueError as e:
-        return _err(f"{e} (the image must show bright vertical stripes; check --pixel-fov)")
+        return fail(f"{e} (the image must show bright vertical stripes; check --pixel-fov)")
     if args.json:
         _print_json(_clean({"image": str(path), **r.as_dict()}))
     else:
@@ -106,7 +101,7 @@ def _cmd_trials(args: argparse.Namespace) -> int:
     try:
         n = braking.trials_needed(args.p_max, args.beta)
     except ValueError as e:
-        return _err(str(e))
+        return fail(str(e))
     printed = braking.PAPER_TABLE1.get((args.p_max, args.beta))
     out = {"p_max": args.p_max, "beta": args.beta, "trials": n, "paper_printed": printed}
     if args.json:
@@ -125,7 +120,7 @@ def _cmd_exceedance(args: argparse.Namespace) -> int:
         p = braking.exceedance(args.p_max, args.k, args.channels)
         k_sil4 = braking.measurements_needed(args.p_max, braking.SIL4, args.channels)
     except ValueError as e:
-        return _err(str(e))
+        return fail(str(e))
     out = {
         "p_max": args.p_max,
         "k": args.k,
@@ -170,7 +165,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             obstacle_at_m=args.obstacle_at,
         )
     except ValueError as e:
-        return _err(str(e))
+        return fail(str(e))
     if args.json:
         _print_json(_clean(plan.as_dict()))
     else:
@@ -203,7 +198,7 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
             seed=args.seed,
         )
     except ValueError as e:
-        return _err(str(e))
+        return fail(str(e))
     png = render_histogram_png(r, args.png) if args.png else None
     d = r.as_dict()
     d["png"] = None if png is None else str(png)

@@ -8,23 +8,18 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from service.commands._common import fail
 from tail_check import DEFAULT_PROFILE, CameraProfile, calibrate, detect, load_profile
 from tail_check.study import StudyResult, StudySample, epsilon_curves
 from tail_check.synth import write_study_set
 
 __all__ = ["register"]
-
-
-def _fail(message: str) -> int:
-    print(f"error: {message}", file=sys.stderr)
-    return 2
 
 
 def _profile(path: str | None) -> CameraProfile:
@@ -42,13 +37,13 @@ def _tail_check(args: argparse.Namespace) -> int:
     try:
         profile = _profile(args.profile)
     except ValueError as exc:
-        return _fail(f"{exc}; pass a profile written by `depot calibrate`")
+        return fail(f"{exc}; pass a profile written by `depot calibrate`")
     failed = False
     for name in args.files:
         try:
             result = detect(_read_image(name), profile)
         except ValueError as exc:
-            print(f"error: {exc}", file=sys.stderr)
+            fail(str(exc))
             failed = True
             continue
         record = {"file": name, **result.to_dict()}
@@ -78,7 +73,7 @@ def _calibrate(args: argparse.Namespace) -> int:
         base = _profile(args.base)
         profile = calibrate(_read_image(args.image), args.disc, base=base, name=args.name)
     except ValueError as exc:
-        return _fail(f"{exc}; give a snapshot with the disc visible and --disc X,Y inside it")
+        return fail(f"{exc}; give a snapshot with the disc visible and --disc X,Y inside it")
     text = profile.to_json()
     if args.out:
         Path(args.out).write_text(text + "\n", encoding="utf-8")
@@ -125,13 +120,13 @@ def _tail_study(args: argparse.Namespace) -> int:
     directory = Path(args.directory)
     labels = Path(args.labels) if args.labels else directory / "labels.csv"
     if not directory.is_dir():
-        return _fail(f"{directory} is not a folder; give the folder of labelled snapshots")
+        return fail(f"{directory} is not a folder; give the folder of labelled snapshots")
     if not labels.is_file():
-        return _fail(f"labels file {labels} not found; pass --labels (or run `depot tail-synth`)")
+        return fail(f"labels file {labels} not found; pass --labels (or run `depot tail-synth`)")
     try:
         result = epsilon_curves(_study_samples(directory, labels), kernel_fraction=args.kernel)
     except (ValueError, KeyError) as exc:
-        return _fail(f"{exc}; the labels need columns file,x,y,w,h,s_ref,ref_x,ref_y")
+        return fail(f"{exc}; the labels need columns file,x,y,w,h,s_ref,ref_x,ref_y")
     plot = Path(args.plot) if args.plot else directory / "epsilon.png"
     _plot(result, plot)
     print(result.table())
@@ -153,7 +148,7 @@ def _tail_synth(args: argparse.Namespace) -> int:
         w, h = (int(v) for v in args.size.lower().split("x"))
         labels = write_study_set(args.directory, args.count, seed=args.seed, size=(w, h))
     except ValueError as exc:
-        return _fail(f"{exc}; e.g. --count 100 --size 640x480")
+        return fail(f"{exc}; e.g. --count 100 --size 640x480")
     print(f"wrote {args.count} snapshots and {labels}")
     return 0
 

@@ -12,9 +12,9 @@ from numpy.typing import NDArray
 
 matplotlib.use("Agg")  # no display on a server; must precede any pyplot import anywhere
 
-from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
-from matplotlib.dates import AutoDateLocator, ConciseDateFormatter  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.dates import AutoDateLocator, ConciseDateFormatter
+from matplotlib.figure import Figure
 
 
 def _utc(at: str) -> np.datetime64:

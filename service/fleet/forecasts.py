@@ -1,5 +1,6 @@
 """The fleet forecast job: read every car's stored history in bulk, assess it, append forecasts.
 
+Reading, computing and writing overlap on PostgreSQL (:mod:`service.fleet.pipeline`).
 One streamed read of the tests ordered by car (never one query per car, see
 :mod:`service.fleet.history`): the first cars calibrate the fleet's weights and index band (see
 :mod:`service.fleet.calibration`), then chunks of cars are assessed — vectorised over cars
@@ -10,6 +11,7 @@ forecast row, so cars without enough history show in the fleet view too (last, w
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import json
 import logging
@@ -17,25 +19,29 @@ import math
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta
+from functools import partial
 from typing import Any
 
 import numpy as np
-from sqlalchemy import JSON, Text, bindparam, cast, insert, select
+import orjson
+from sqlalchemy import JSON, Engine, Text, bindparam, cast, insert, select
 from sqlalchemy.orm import Session
 
+from core.database import utcnow
+from core.errors import Unprocessable
+from core.models import Car
 from maintenance.fleet import CarAssessment, assess_car
-from service.database import utcnow
-from service.errors import Unprocessable
 from service.fleet.calibration import SAMPLE_CARS, FleetIndex, calibrate
 from service.fleet.history import Bands, CarHistory, empty_history, histories, load_bands
 from service.fleet.models import Forecast
+from service.fleet.pipeline import Writer, read_ahead
 from service.fleet.vectorised import Outcome, batch_assessments, payload_of
-from service.setup.models import Car
 
 log = logging.getLogger("depot.fleet")
 Progress = Callable[[int, int], None]
 _WRITE_CHUNK = 500
 _COMPUTE_CHUNK = 1000  # cars assessed together (vectorised per history length)
+_READ_AHEAD = 2 * _COMPUTE_CHUNK  # car histories the reader may hold ahead of the computation
 NO_HISTORY = "no measurements of parameters with a tolerance band"
 TOO_SPARSE = "no parameter with a tolerance band was measured at half of the car's tests or more"
 
@@ -122,6 +128,14 @@ def _finite(value: Any) -> Any:
     return value
 
 
+def out_of_band_now(payload: dict[str, Any]) -> bool:
+    """Whether the car's latest index already lies outside its band."""
+    index, band = payload.get("index") or [], payload.get("index_band")
+    if not index or not band or index[-1] is None:
+        return False
+    return not band[0] <= index[-1] <= band[1]
+
+
 def forecast_row(
     history: CarHistory,
     bands: Bands,
@@ -133,11 +147,13 @@ def forecast_row(
     """The Forecast row (as insert values) of one car (``outcome``: assessed already)."""
     status, risk, payload = outcome or _outcome(history, bands, fleet, options)
     step = payload.get("first_exit")
-    if step is not None and payload.get("forecast"):
+    payload["out_of_band_now"] = out_of_band_now(payload)
+    if step is not None and payload.get("forecast") and not payload["out_of_band_now"]:
         # The package words the exit in days since the first test; engineers plan by the date.
         when = history.start + timedelta(days=payload["forecast"]["times"][step - 1])
+        ahead = "at the next test" if step == 1 else f"{step} tests ahead"
         payload["reasons"] = [
-            f"expected out of its index band by {when:%Y-%m-%d} ({step} tests ahead)",
+            f"expected to leave its index band by {when:%Y-%m-%d} ({ahead})",
             *payload.get("reasons", []),
         ]
     kept = list(payload.get("weights") or history.names)
@@ -175,6 +191,20 @@ def calibrate_fleet_index(
     return fleet
 
 
+def _reader_session(session: Session) -> Session | None:
+    """A session of its own for the reader thread, or None to read through ``session``.
+
+    Only on PostgreSQL with ``session`` bound to an engine: the reader sees committed
+    measurements (the job's own uncommitted writes are forecast rows, never read).
+    A session bound to one connection (an outer transaction, as in tests) reads
+    through that connection, in the job's thread.
+    """
+    bind = session.get_bind()
+    if isinstance(bind, Engine) and bind.dialect.name == "postgresql":
+        return Session(bind)
+    return None
+
+
 def run_forecasts(
     session: Session,
     options: ForecastOptions | None = None,
@@ -182,21 +212,48 @@ def run_forecasts(
     progress: Progress | None = None,
     at: datetime | None = None,
 ) -> FleetRun:
-    """Forecast every registered car from its stored history; append one Forecast row each."""
+    """Forecast every registered car from its stored history; append one Forecast row each.
+
+    On PostgreSQL reading (own connection, thread), computing (this thread) and writing
+    (``session``, thread) overlap, chunk by chunk (see :mod:`service.fleet.pipeline`).
+    """
     options = options or ForecastOptions()
     bands = load_bands(session)
-    stream = histories(session, bands.names)
+    known = set(session.scalars(select(Car.id)))
+    reader = _reader_session(session)
+    with contextlib.ExitStack() as stack:
+        if reader is None:
+            stream: Iterator[CarHistory] = histories(session, bands.names)
+            write: Callable[[list[dict[str, Any]]], None] = partial(write_forecasts, session)
+        else:
+            stack.enter_context(reader)
+            stream = read_ahead(lambda: histories(reader, bands.names), depth=_READ_AHEAD)
+            stack.callback(stream.close)  # type: ignore[attr-defined]
+            write = stack.enter_context(Writer(partial(write_forecasts, session), depth=2)).submit
+        run = _assess_all(stream, known, bands, options, write, progress, at)
+    session.flush()
+    return run
+
+
+def _assess_all(
+    stream: Iterator[CarHistory],
+    known: set[str],
+    bands: Bands,
+    options: ForecastOptions,
+    write: Callable[[list[dict[str, Any]]], None],
+    progress: Progress | None,
+    at: datetime | None,
+) -> FleetRun:
     # One pass: the first cars calibrate the fleet index, then are assessed with the rest.
     sample = list(itertools.islice(stream, SAMPLE_CARS))
     fleet = calibrate_fleet_index(sample, bands, options)
     run = FleetRun(computed_at=at or utcnow(), calibration=fleet.note)
-    known = set(session.scalars(select(Car.id)))
-    total = len(known)
     pending: list[dict[str, Any]] = []
     seen: set[str] = set()
     risks: list[tuple[str, float]] = []
 
     def emit(history: CarHistory, outcome: Outcome | None = None) -> None:
+        nonlocal pending
         row = forecast_row(history, bands, fleet, options, run.computed_at, outcome)
         pending.append(row)
         seen.add(history.car_id)
@@ -204,9 +261,10 @@ def run_forecasts(
         if row["risk"] is not None:
             risks.append((history.car_id, row["risk"]))
         if len(pending) >= _WRITE_CHUNK:
-            write_forecasts(session, pending)
+            write(pending)
+            pending = []  # the writer owns the submitted list
         if progress is not None:
-            progress(len(seen), total)
+            progress(len(seen), len(known))
 
     for chunk in _chunks(itertools.chain(sample, stream)):
         # the foreign key makes membership always true; be safe anyway
@@ -215,10 +273,9 @@ def run_forecasts(
             emit(chunk[i], outcome)
     for car_id in sorted(known - seen):
         emit(empty_history(car_id))
-    write_forecasts(session, pending)
+    write(pending)
     run.cars = len(seen)
     run.top = sorted(risks, key=lambda item: -item[1])[:5]
-    session.flush()
     return run
 
 
@@ -258,10 +315,12 @@ def write_forecasts(session: Session, rows: list[dict[str, Any]]) -> None:
 
 
 def _encoded(payload: dict[str, Any]) -> str:
+    # orjson writes NaN/inf as null, as _finite does, several times faster than json: the
+    # encoding runs in the writer thread and holds the GIL the computation needs.
     try:
-        return json.dumps(payload, allow_nan=False)
-    except ValueError:
-        return json.dumps(_finite(payload), allow_nan=False)
+        return orjson.dumps(payload).decode()
+    except TypeError:  # a type orjson does not know (e.g. a numpy scalar in a payload)
+        return json.dumps(_finite(payload), allow_nan=False, default=float)
 
 
 _INSERT_ENCODED = insert(Forecast).values(

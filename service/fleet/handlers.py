@@ -4,13 +4,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from ingest.handlers import Derivation, handles
+from core.models import Car
+from ingest.handlers import Derivation
+from service.fleet.rules import registered, value_problems
 from service.fleet.service import record_measurements
-from service.setup.models import Car
 
 
-@handles("measurement")
-def _measured(d: Derivation) -> dict[str, Any]:
+def measurement(d: Derivation) -> dict[str, Any]:
     car_id = d.event.car
     if d.session.get(Car, car_id) is None:
         # The raw event is kept (replay derives it again once the car is registered).
@@ -19,6 +19,11 @@ def _measured(d: Derivation) -> dict[str, Any]:
             "measurements": 0,
             "warning": f"car {car_id!r} is not registered; register it with POST /api/v1/cars",
         }
+    refused = value_problems(registered(d.session), d.event.values)
+    if refused:
+        # The raw event is kept (replay applies it once the parameters are registered); the
+        # device learns why nothing was stored.
+        return {"car": car_id, "measurements": 0, "refused": refused}
     stored = record_measurements(
         d.session,
         car_id,

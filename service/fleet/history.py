@@ -19,6 +19,7 @@ from sqlalchemy import DateTime, select, type_coerce
 from sqlalchemy.orm import Session
 
 from maintenance.bands import bands_from_nominal
+from service.fleet.blocks import Block
 from service.fleet.models import READINGS_DTYPE, Measurement, MeasurementLayout, Parameter
 from service.fleet.pg_arrays import stream_postgresql
 
@@ -93,15 +94,6 @@ def load_bands(session: Session) -> Bands:
         return Bands((), np.zeros((0, 2)), {})
     limits = bands_from_nominal([p.nominal for p in params], [p.tolerance for p in params])
     return Bands(tuple(p.name for p in params), limits, {p.name: p.unit for p in params})
-
-
-class Block(NamedTuple):
-    """A car's tests of one layout, in (time, id) order."""
-
-    layout_id: int
-    epoch_s: NDArray[np.float64]
-    ids: NDArray[np.int64]
-    readings: NDArray[np.float64]  # (n_tests, n_names of the layout)
 
 
 class Columns(NamedTuple):

@@ -9,8 +9,8 @@ import numpy as np
 from sqlalchemy import JSON, Float, ForeignKey, Index, Integer, LargeBinary, String, Text
 from sqlalchemy.orm import Mapped, mapped_column
 
+from core.database import Base, UTCDateTime, utcnow
 from ingest.models import BigId
-from service.database import Base, UTCDateTime, utcnow
 
 # A test's values in the order of its layout's names, as little-endian float64 bytes (numpy
 # reads them without parsing; PostgreSQL concatenates a car's tests with string_agg). Read and
@@ -88,3 +88,7 @@ class Parameter(Base):
     tolerance: Mapped[float] = mapped_column(Float)
     unit: Mapped[str] = mapped_column(String(16), default="")
     description: Mapped[str] = mapped_column(Text, default="")
+    # Values outside [plausible_lower, plausible_upper] are refused (service/fleet/rules.py);
+    # unset, the range follows from the band.
+    plausible_lower: Mapped[float | None] = mapped_column(Float, nullable=True)
+    plausible_upper: Mapped[float | None] = mapped_column(Float, nullable=True)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import itertools
 import struct
 from collections.abc import Generator
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,10 +18,8 @@ from psycopg.adapt import Buffer, Loader
 from psycopg.pq import Format
 from sqlalchemy.orm import Session
 
+from service.fleet.blocks import Block
 from service.fleet.models import READINGS_DTYPE
-
-if TYPE_CHECKING:
-    from service.fleet.history import Block
 
 INT8_ARRAY_OID = 1016
 _ROWS_PER_FETCH = 200
@@ -68,8 +66,6 @@ def stream_postgresql(
     session: Session, layouts: list[int]
 ) -> Generator[tuple[str, list[Block]], None, None]:
     """Each car's blocks of tests (one per layout), cars in id order, via a server-side cursor."""
-    from service.fleet.history import Block
-
     driver = session.connection().connection.driver_connection
     name = f"depot_fleet_histories_{next(_CURSORS)}"  # unique: two readers may overlap
     cursor = driver.cursor(name=name, binary=True)  # type: ignore[union-attr]

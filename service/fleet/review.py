@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Form, Request
+from fastapi import APIRouter, Form, Query, Request
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
-from service.database import DbSession, utcnow
-from service.errors import DepotError
+from core.database import DbSession, utcnow
+from core.errors import DepotError
 from service.fleet import service, views
 from service.fleet.chart import cached_chart
 from service.reasons import meaningful
@@ -26,14 +26,42 @@ ADVICE_WORDS = {
 }
 
 
+PAGE_SIZE = 20  # cars (and charts) per page: a fleet of thousands must not be one page
+
+
+def _matching(cars: list[dict[str, Any]], car: str, advice: str) -> list[dict[str, Any]]:
+    wanted = car.strip().lower()
+    return [
+        c
+        for c in cars
+        if (not wanted or wanted in c["car"].lower()) and (not advice or c["decision"] == advice)
+    ]
+
+
 @router.get("/review/fleet", response_class=HTMLResponse)
-def fleet_page(request: Request, session: DbSession, notice: str | None = None) -> Response:
+def fleet_page(
+    request: Request,
+    session: DbSession,
+    notice: str | None = None,
+    car: Annotated[str, Query(max_length=32)] = "",
+    advice: Annotated[str, Query(max_length=32)] = "",
+    page: Annotated[int, Query(ge=1, le=100_000)] = 1,
+) -> Response:
     who = _who(request, session)
     if who is None:
         return RedirectResponse("/review/login", status_code=303)
+    fleet = views.fleet_out(session)
+    shown = _matching(fleet["cars"], car, advice if advice in ADVICE_WORDS else "")
+    pages = max(1, -(-len(shown) // PAGE_SIZE))
+    page = min(page, pages)
     context: dict[str, Any] = {
         "who": who,
-        "fleet": views.fleet_out(session),
+        "fleet": fleet,
+        "shown": shown[(page - 1) * PAGE_SIZE : page * PAGE_SIZE],
+        "matching": len(shown),
+        "filter": {"car": car, "advice": advice},
+        "page": page,
+        "pages": pages,
         "notice": notice,
         "may_decide": who.role in DECIDERS,
         "advice_words": ADVICE_WORDS,

@@ -7,13 +7,22 @@ from typing import Any
 from fastapi import APIRouter, Body
 from fastapi.responses import Response
 
-from service.auth import CurrentEngineer, CurrentReader
-from service.database import DbSession, utcnow
-from service.errors import NotFound
+from core.auth import CurrentEngineer, CurrentReader
+from core.database import DbSession, utcnow
+from core.errors import NotFound
 from service.fleet import service, views
 from service.fleet.chart import cached_chart
 from service.fleet.forecasts import ForecastOptions, run_forecasts
 from service.fleet.models import Forecast, Parameter
+from service.fleet.responses import (
+    FleetOut,
+    ForecastOut,
+    ForecastRunOut,
+    MeasurementsStored,
+    OverrideOut,
+    ParameterOut,
+)
+from service.fleet.rules import plausible_range, refuse_implausible, registered
 from service.fleet.schemas import ForecastRunIn, MaintenanceDecisionIn, MeasurementIn, ParameterIn
 
 router = APIRouter(tags=["maintenance"])
@@ -31,36 +40,41 @@ def _parameter_out(parameter: Parameter) -> dict[str, Any]:
         "upper": parameter.nominal + parameter.tolerance,
         "unit": parameter.unit,
         "description": parameter.description,
+        "plausible_lower": plausible_range(parameter)[0],
+        "plausible_upper": plausible_range(parameter)[1],
     }
 
 
-@router.post("/cars/{car_id}/measurements", status_code=201)
+@router.post("/cars/{car_id}/measurements", status_code=201, response_model=MeasurementsStored)
 def post_measurements(
     car_id: str, body: MeasurementIn, session: DbSession, _: CurrentEngineer
 ) -> dict[str, Any]:
     service.require_car(session, car_id)
+    refuse_implausible(registered(session), body.values)
     stored = service.record_measurements(session, car_id, body.taken_at, body.values, source="api")
     return {"car": car_id, "taken_at": body.taken_at.isoformat(), "measurements": stored}
 
 
-@router.get("/maintenance/parameters")
+@router.get("/maintenance/parameters", response_model=list[ParameterOut])
 def list_parameters(session: DbSession, _: CurrentReader) -> list[dict[str, Any]]:
     return [_parameter_out(p) for p in service.list_parameters(session)]
 
 
-@router.post("/maintenance/parameters", status_code=201, responses={409: {}})
+@router.post(
+    "/maintenance/parameters", status_code=201, response_model=ParameterOut, responses={409: {}}
+)
 def create_parameter(body: ParameterIn, session: DbSession, _: CurrentEngineer) -> dict[str, Any]:
     return _parameter_out(service.create_parameter(session, body))
 
 
-@router.put("/maintenance/parameters/{name}")
+@router.put("/maintenance/parameters/{name}", response_model=ParameterOut)
 def update_parameter(
     name: str, body: ParameterIn, session: DbSession, _: CurrentEngineer
 ) -> dict[str, Any]:
     return _parameter_out(service.update_parameter(session, name, body))
 
 
-@router.post("/maintenance/forecasts", status_code=201)
+@router.post("/maintenance/forecasts", status_code=201, response_model=ForecastRunOut)
 def compute_forecasts(
     session: DbSession, _: CurrentEngineer, body: ForecastRunIn | None = Body(default=None)
 ) -> dict[str, Any]:
@@ -87,7 +101,7 @@ def _latest(session: DbSession, car_id: str) -> Forecast:
     return forecast
 
 
-@router.get("/cars/{car_id}/forecast")
+@router.get("/cars/{car_id}/forecast", response_model=ForecastOut)
 def get_forecast(car_id: str, session: DbSession, _: CurrentReader) -> dict[str, Any]:
     return views.forecast_out(session, _latest(session, car_id))
 
@@ -100,12 +114,12 @@ def get_forecast_chart(car_id: str, session: DbSession, _: CurrentReader) -> Res
     return Response(png, media_type="image/png", headers={"Cache-Control": "private, max-age=60"})
 
 
-@router.get("/maintenance/fleet")
+@router.get("/maintenance/fleet", response_model=FleetOut)
 def get_fleet(session: DbSession, _: CurrentReader) -> dict[str, Any]:
     return views.fleet_out(session)
 
 
-@router.post("/cars/{car_id}/maintenance-decision", status_code=201)
+@router.post("/cars/{car_id}/maintenance-decision", status_code=201, response_model=OverrideOut)
 def decide_car(
     car_id: str, body: MaintenanceDecisionIn, session: DbSession, who: CurrentEngineer
 ) -> dict[str, Any]:

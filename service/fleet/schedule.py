@@ -12,9 +12,9 @@ from fastapi import FastAPI
 from sqlalchemy import text
 from sqlalchemy.orm import Session, sessionmaker
 
-from service.database import get_sessionmaker
+from core.database import get_sessionmaker
+from core.settings import get_settings
 from service.fleet.forecasts import FleetRun, ForecastOptions, run_forecasts
-from service.settings import get_settings
 
 log = logging.getLogger("depot.fleet.schedule")
 # Several server workers each run a schedule; on PostgreSQL one transaction-level advisory lock
@@ -58,7 +58,7 @@ class ForecastSchedule:
         while not self._stop.wait(self.every):
             try:
                 self.job()
-            except Exception:  # noqa: BLE001 - a failed round is logged; the next one retries
+            except Exception:
                 log.exception("scheduled forecast failed")
             self.rounds += 1
 

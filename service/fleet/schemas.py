@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
+from core.schemas import StrictModel
 from ingest.schemas import DeviceTime, MeasuredValues
 from service.reasons import Reason
 
@@ -18,23 +19,30 @@ WeightsMethod = Literal["prediction", "inverse_variance", "rayleigh", "equal", "
 WEIGHTS_METHODS: tuple[str, ...] = ("prediction", "inverse_variance", "rayleigh", "equal", "fisher")
 
 
-class StrictModel(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-
-
 class MeasurementIn(StrictModel):
     taken_at: DeviceTime
     values: MeasuredValues
+
+
+# No railway quantity comes near this in any unit; beyond it the band arithmetic overflows.
+MAX_MAGNITUDE = 1e15
 
 
 class ParameterIn(StrictModel):
     """A measured parameter and its tolerance band ``nominal ± tolerance``."""
 
     name: ParameterName
-    nominal: Annotated[float, Field(allow_inf_nan=False)]
-    tolerance: Annotated[float, Field(gt=0, allow_inf_nan=False)]
+    # Bounded so that the band's edges nominal ± tolerance stay finite numbers.
+    nominal: Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)]
+    tolerance: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)]
     unit: Annotated[str, Field(max_length=16)] = ""
     description: Annotated[str, Field(max_length=2000)] = ""
+    plausible_lower: (
+        Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None
+    ) = Field(default=None, description="values below are refused (default: the band's)")
+    plausible_upper: (
+        Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None
+    ) = Field(default=None, description="values above are refused (default: the band's)")
 
 
 class ForecastRunIn(StrictModel):

@@ -16,8 +16,9 @@ from sqlalchemy.dialects.postgresql import insert as pg_insert
 from sqlalchemy.dialects.sqlite import insert as sqlite_insert
 from sqlalchemy.orm import Session
 
-from service.auth import Principal
-from service.errors import Conflict, NotFound
+from core.auth import Principal
+from core.errors import Conflict, NotFound
+from core.models import Car
 from service.fleet.models import (
     MaintenanceOverride,
     Measurement,
@@ -27,7 +28,6 @@ from service.fleet.models import (
     encode_readings,
 )
 from service.fleet.schemas import ParameterIn
-from service.setup.models import Car
 
 
 def require_car(session: Session, car_id: str) -> Car:

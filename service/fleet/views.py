@@ -102,6 +102,7 @@ def summary_out(forecast: Forecast, override: MaintenanceOverride | None) -> dic
         "recommendation": advice,
         "decision": override.action if override is not None else advice,
         "first_exit": first_exit,
+        "out_of_band_now": bool(p.get("out_of_band_now")),
         "k_of_l_probability": p.get("k_of_l_probability"),
         "reasons": p.get("reasons", []),
         "weights": p.get("weights", {}),
@@ -140,12 +141,17 @@ def forecast_out(session: Session, forecast: Forecast) -> dict[str, Any]:
 
 
 def fleet_out(session: Session) -> dict[str, Any]:
-    """Cars ranked by risk (highest first), each with its weights, contributions and override."""
+    """Cars in service ranked by risk (highest first), each with its weights, contributions and
+    override; cars an engineer withdrew leave the ranking and are listed apart."""
     forecasts = sorted(latest_forecasts(session), key=lambda f: (rank_key(f), f.car_id))
     overrides = latest_overrides(session)
-    cars = [
-        {"rank": rank, **summary_out(f, overrides.get(f.car_id))}
-        for rank, f in enumerate(forecasts, start=1)
-    ]
+    summaries = [summary_out(f, overrides.get(f.car_id)) for f in forecasts]
+    in_service = [c for c in summaries if c["decision"] != "withdraw_now"]
+    cars = [{"rank": rank, **c} for rank, c in enumerate(in_service, start=1)]
     latest = max((f.computed_at for f in forecasts), default=None)
-    return {"computed_at": latest.isoformat() if latest else None, "cars": cars}
+    withdrawn = [c for c in summaries if c["decision"] == "withdraw_now"]
+    return {
+        "computed_at": latest.isoformat() if latest else None,
+        "cars": cars,
+        "withdrawn": withdrawn,
+    }

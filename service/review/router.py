@@ -9,7 +9,10 @@ from fastapi import APIRouter, Form, Query, Request
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from fastapi.templating import Jinja2Templates
 
-from service.auth import Principal, person_for_token
+from core.auth import Principal, person_for_token
+from core.database import DbSession, utcnow
+from core.errors import DepotError
+from core.settings import get_settings
 from service.clearance import service as clearance
 from service.clearance.router import (
     MAX_ROW_ID,
@@ -18,11 +21,8 @@ from service.clearance.router import (
     get_snapshot_image,
     get_snapshot_overlay,
 )
-from service.database import DbSession, utcnow
-from service.errors import DepotError
 from service.reasons import meaningful
 from service.review.service import STATE_WORDS, aligned_rows, build_screen
-from service.settings import get_settings
 
 COOKIE = "depot_review"
 templates = Jinja2Templates(directory=str(Path(__file__).parent / "templates"))
@@ -91,6 +91,13 @@ def review(
     return templates.TemplateResponse(request, "review.html", context)
 
 
+DONE_WORDS = {
+    "clear": "cleared",
+    "keep_blocked": "kept blocked",
+    "sweep": "the section waits for a sweep train",
+}
+
+
 @router.post("/review/runs/{run_id}/decision")
 def decide(
     request: Request,
@@ -104,12 +111,12 @@ def decide(
         return RedirectResponse("/review/login", status_code=303)
     if who.role not in ("dispatcher", "admin"):
         notice = "Only a dispatcher may clear or block a section."
-    elif action not in ("clear", "keep_blocked") or (kept := meaningful(reason)) is None:
+    elif action not in DONE_WORDS or (kept := meaningful(reason)) is None:
         notice = "Give a reason of at least 3 characters."
     else:
         try:
             clearance.act(session, run_id, action, kept, who, utcnow())
-            notice = f"Run {run_id}: {'cleared' if action == 'clear' else 'kept blocked'}."
+            notice = f"Run {run_id}: {DONE_WORDS[action]}."
         except DepotError as exc:
             notice = exc.detail
     return RedirectResponse(

@@ -9,10 +9,10 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from core.models import Device, Section
+from core.settings import get_settings
 from service.clearance.models import Run
 from service.clearance.views import QUEUE_STATES, run_out, section_out
-from service.settings import get_settings
-from service.setup.models import Device, Section
 
 STATE_WORDS = {
     "free": "free",
@@ -21,6 +21,7 @@ STATE_WORDS = {
     "review": "needs review",
     "alarm": "ALARM",
     "blocked": "blocked",
+    "awaiting_sweep": "awaiting sweep",
 }
 
 

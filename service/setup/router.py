@@ -7,16 +7,17 @@ from typing import Any
 from fastapi import APIRouter
 from sqlalchemy import select
 
-from service.auth import Admin, CurrentReader
-from service.database import DbSession
+from core.auth import Admin, CurrentReader
+from core.database import DbSession
+from core.models import Car, Device, Station
 from service.setup import service
-from service.setup.models import Car, Device, Station
 from service.setup.schemas import (
     CarIn,
     CarOut,
     DeviceCreated,
     DeviceIn,
     DeviceOut,
+    SectionCreated,
     SectionIn,
     StationIn,
     StationOut,
@@ -40,7 +41,7 @@ def get_station(station_id: str, session: DbSession, _: CurrentReader) -> Any:
     return service.get_or_404(session, Station, station_id, "station")
 
 
-@router.post("/sections", status_code=201)
+@router.post("/sections", status_code=201, response_model=SectionCreated)
 def create_section(body: SectionIn, session: DbSession, _: Admin) -> dict[str, Any]:
     section = service.create_section(session, body)
     return {

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from datetime import datetime
 from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from service.setup.models import DEVICE_KINDS
+from core.models import DEVICE_KINDS
+from core.schemas import Instant, StrictModel
 
 Identifier = Annotated[
     str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
@@ -16,10 +16,6 @@ DeviceIdentifier = Annotated[
     str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 ]
 DeviceKind = Literal[DEVICE_KINDS]  # type: ignore[valid-type]
-
-
-class StrictModel(BaseModel):
-    model_config = ConfigDict(extra="forbid")
 
 
 class StationIn(StrictModel):
@@ -59,7 +55,7 @@ class DeviceOut(BaseModel):
     station: str
     section: str | None
     kind: str
-    last_seen_at: datetime | None = None
+    last_seen_at: Instant | None = None
     stale: bool | None = None
 
 
@@ -80,3 +76,58 @@ class CarOut(BaseModel):
     wheel_code: int | None
     ir_number: int | None
     axles: int
+
+
+class SectionCreated(BaseModel):
+    id: str
+    from_station: str
+    to_station: str
+    mode: str
+    state: str = Field(description="free until the first train departs")
+    run: None = Field(default=None, description="no run holds a new section")
+
+
+class UserIn(StrictModel):
+    name: Identifier
+    role: Literal["dispatcher", "engineer"]
+    expires_in_days: Annotated[float, Field(gt=0, le=3650)] | None = Field(
+        default=None, description="the token stops working after this many days (none: never)"
+    )
+
+
+class TokenRotateIn(StrictModel):
+    expires_in_days: Annotated[float, Field(gt=0, le=3650)] | None = None
+
+
+class UserOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+    name: str
+    role: str
+    created_at: Instant
+    expires_at: Instant | None
+    revoked_at: Instant | None
+
+
+class UserToken(UserOut):
+    token: str = Field(description="the bearer token; shown once, store it now")
+
+
+class DeviceKey(BaseModel):
+    device: str
+    key: str = Field(description="the new device key; shown once. The old key stops at once.")
+
+
+class DeviceDecommissioned(BaseModel):
+    device: str
+    decommissioned_at: Instant
+
+
+class CredentialChangeOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+    id: int
+    recorded_at: Instant
+    actor: str
+    action: str
+    subject_kind: str
+    subject: str
+    detail: str

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-from datetime import datetime, timedelta
-
 from sqlalchemy import or_, select
 from sqlalchemy.orm import Session
 
-from service.auth import hash_secret, new_secret
-from service.errors import Conflict, NotFound, Unprocessable
-from service.setup.models import ROLES, Car, Device, Section, Station, User
+from core.auth import hash_secret, new_secret
+from core.errors import Conflict, NotFound, Unprocessable
+from core.models import Car, Device, Section, Station
+from service.setup.credentials import add_user
 from service.setup.schemas import CarIn, DeviceIn, SectionIn, StationIn
 
 
@@ -88,14 +87,7 @@ def create_car(session: Session, data: CarIn) -> Car:
 
 def create_user(session: Session, name: str, role: str) -> str:
     """Create a person with a role; returns the token, which is stored only hashed."""
-    if role not in ROLES:
-        raise Unprocessable(f"role must be one of {', '.join(ROLES)}")
-    if session.scalar(select(User.id).where(User.name == name)) is not None:
-        raise Conflict(f"user {name!r} already exists")
-    token = new_secret()
-    session.add(User(name=name, role=role, token_hash=hash_secret(token)))
-    session.flush()
-    return token
+    return add_user(session, name, role, actor="admin")[1]
 
 
 def get_or_404(session: Session, model: type, ident: str, what: str) -> object:
@@ -112,10 +104,3 @@ def section_devices(session: Session, section: Section, station: str) -> list[De
             .order_by(Device.id)
         )
     )
-
-
-def is_stale(device: Device, at: datetime, heartbeat_s: float) -> bool:
-    """A device silent for longer than its heartbeat period counts as stale at ``at``."""
-    if device.last_seen_at is None:
-        return True
-    return at - device.last_seen_at > timedelta(seconds=heartbeat_s)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ingest.handlers import Derivation, handles
+from ingest.handlers import Derivation
 from ingest.schemas import MotionSample
 from motion.samples import StaleSampleError
 from service.trains import service
@@ -15,8 +15,7 @@ def sample_of(event: MotionSample) -> dict[str, Any]:
     return event.model_dump(exclude_none=True, exclude={"event_id", "occurred_at", "kind"})
 
 
-@handles("motion_sample")
-def _motion(d: Derivation) -> dict[str, Any]:
+def motion_sample(d: Derivation) -> dict[str, Any]:
     try:
         state = service.feed(d.session, d.event.train, sample_of(d.event), d.event.occurred_at)
     except StaleSampleError as exc:

@@ -8,7 +8,7 @@ from typing import Any
 from sqlalchemy import JSON, Float, String
 from sqlalchemy.orm import Mapped, mapped_column
 
-from service.database import Base, UTCDateTime
+from core.database import Base, UTCDateTime
 
 
 class TrackMarker(Base):

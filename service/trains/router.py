@@ -7,10 +7,11 @@ from typing import Any
 from fastapi import APIRouter
 from sqlalchemy import select
 
-from service.auth import Admin, CurrentReader
-from service.database import DbSession
+from core.auth import Admin, CurrentReader
+from core.database import DbSession
 from service.trains import service
 from service.trains.models import TrackMarker
+from service.trains.responses import TrainPositionOut
 from service.trains.schemas import MarkerIn, MarkerOut
 
 router = APIRouter(tags=["motion"])
@@ -26,7 +27,7 @@ def list_markers(session: DbSession, _: CurrentReader) -> Any:
     return session.scalars(select(TrackMarker).order_by(TrackMarker.track_m)).all()
 
 
-@router.get("/trains/{train}/position")
+@router.get("/trains/{train}/position", response_model=TrainPositionOut)
 def train_position(train: str, session: DbSession, _: CurrentReader) -> dict[str, Any]:
     """Coordinate, speed, section and their uncertainty from the train's fused sensors."""
     return service.position(session, train)

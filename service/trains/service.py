@@ -8,9 +8,9 @@ from sqlalchemy import select
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
+from core.errors import Conflict, NotFound, Unprocessable
+from core.models import Section
 from motion.fusion import FilterConfig, Marker, MarkerTable, TrackFilter
-from service.errors import Conflict, NotFound, Unprocessable
-from service.setup.models import Section
 from service.trains.models import TrackMarker, TrainPosition
 from service.trains.schemas import MarkerIn
 

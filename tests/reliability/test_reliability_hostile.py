@@ -10,9 +10,9 @@ from fastapi.testclient import TestClient
 from sqlalchemy import func, select, text
 from sqlalchemy.orm import Session
 
+from core.models import Car, Device, Section, Station
+from core.settings import get_settings
 from ingest.models import RawEvent, Snapshot
-from service.settings import get_settings
-from service.setup.models import Car, Device, Section, Station
 from tests.conftest import ADMIN
 from tests.reliability.hostile import (
     EVENT,

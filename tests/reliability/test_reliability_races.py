@@ -22,7 +22,7 @@ def test_same_image_stored_by_eight_threads_at_once(tmp_path: Path) -> None:
             start.wait()
             try:
                 store_image(tmp_path, checked, data)  # type: ignore[arg-type]
-            except BaseException as exc:  # noqa: BLE001 - collected for the assertion
+            except BaseException as exc:
                 errors.append(exc)
 
         threads = [threading.Thread(target=store) for _ in range(8)]

@@ -22,6 +22,7 @@ DEVICES = [
     ("D-mark", "A", None, "marking_station"),
     ("D-bench", "A", None, "test_bench"),
     ("T-obu", "A", None, "onboard_unit"),
+    ("B-eot", "B", "AB", "eot_receiver"),
 ]
 
 
@@ -66,3 +67,18 @@ def event(
     event_id: str, kind: str, at: str = "2026-11-23T10:15:00Z", **fields: Any
 ) -> dict[str, Any]:
     return {"event_id": event_id, "occurred_at": at, "kind": kind, **fields}
+
+
+# The maintenance parameters the fleet tests measure (values must name registered ones).
+BANDS = (
+    {"name": "door_close_s", "nominal": 2.4, "tolerance": 0.5, "unit": "s"},
+    {"name": "brake_release_s", "nominal": 4.0, "tolerance": 1.0, "unit": "s"},
+    {"name": "brake_cylinder_fill_s", "nominal": 5.0, "tolerance": 1.5, "unit": "s"},
+)
+
+
+def register_bands(client: TestClient) -> None:
+    """Register BANDS (a parameter registered before is left as it is)."""
+    for band in BANDS:
+        answer = client.post("/api/v1/maintenance/parameters", json=band, headers=ADMIN)
+        assert answer.status_code in (201, 409), answer.text

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import uvicorn
 
-from service import database
+from core import database
+from core.settings import get_settings
 from service.migrate import upgrade
-from service.settings import get_settings
 
 
 def _free_port() -> int:

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from service import database
+from core import database
+from core.settings import get_settings
 from service.cli import main
-from service.settings import get_settings
 
 
 @pytest.fixture
@@ -65,3 +65,25 @@ def test_demo_loads_once(cli_data_dir: Path, capsys: pytest.CaptureFixture[str])
     assert "already holds a line" in capsys.readouterr().out
     assert main(["replay"]) == 0
     assert "(0 failed to derive)" in capsys.readouterr().out
+
+
+def test_user_lifecycle_and_device_commands(
+    cli_data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["migrate"]) == 0
+    assert main(["user", "add", "olena", "--role", "dispatcher", "--expires-in-days", "30"]) == 0
+    first = capsys.readouterr().out.strip().splitlines()[-1]
+    assert main(["user", "rotate", "olena"]) == 0
+    second = capsys.readouterr().out.strip().splitlines()[-1]
+    assert second != first and len(second) >= 40
+    assert main(["user", "list"]) == 0
+    listing = capsys.readouterr().out
+    assert "olena" in listing and "active" in listing and first not in listing
+    assert main(["user", "revoke", "olena"]) == 0
+    assert "stops working" in capsys.readouterr().out
+    assert main(["user", "list"]) == 0
+    assert "revoked" in capsys.readouterr().out
+    assert main(["user", "rotate", "nobody"]) == 2
+    assert capsys.readouterr().err.startswith("depot: user 'nobody' does not exist")
+    assert main(["device", "key", "nope"]) == 2
+    assert "device 'nope' does not exist" in capsys.readouterr().err

@@ -15,7 +15,7 @@ from service.fleet.service import measured_values
 from service.replay import replay
 from service.setup.service import create_user
 from tests.conftest import ADMIN
-from tests.service.linekit import build_line, event
+from tests.service.linekit import build_line, event, register_bands
 
 T0 = datetime(2026, 11, 1, 7, 30, tzinfo=UTC)
 BAND = {"name": "door_close_s", "nominal": 2.4, "tolerance": 0.5, "unit": "s"}
@@ -23,7 +23,9 @@ BAND = {"name": "door_close_s", "nominal": 2.4, "tolerance": 0.5, "unit": "s"}
 
 @pytest.fixture
 def keys(client: TestClient) -> dict[str, dict[str, str]]:
-    return build_line(client)
+    keys = build_line(client)
+    register_bands(client)
+    return keys
 
 
 def _person(session: Session, name: str, role: str) -> dict[str, str]:
@@ -186,6 +188,7 @@ def test_forecast_run_access_and_options(keys: dict, client: TestClient, dispatc
     assert client.get("/api/v1/maintenance/fleet", headers=dispatcher).json() == {
         "computed_at": None,
         "cars": [],
+        "withdrawn": [],
     }
 
 
@@ -215,8 +218,36 @@ def test_engineer_override_is_audited_and_shown(
     assert [o["action"] for o in body["overrides"]] == ["withdraw_now", "keep_in_service"]
     assert body["override"]["actor"] == "admin" and body["decision"] == "withdraw_now"
     fleet = client.get("/api/v1/maintenance/fleet", headers=dispatcher).json()
-    car = next(c for c in fleet["cars"] if c["car"] == "0118")
+    assert "0118" not in [c["car"] for c in fleet["cars"]]  # withdrawn cars leave the ranking
+    car = next(c for c in fleet["withdrawn"] if c["car"] == "0118")
     assert car["override"]["reason"] == "door actuator leaking"
     assert car["decision"] == "withdraw_now" and car["recommendation"] == "unknown"
     records = session.scalars(select(MaintenanceOverride)).all()
     assert len(records) == 2  # append-only: the first decision is still there
+
+
+def test_the_same_value_rule_for_api_and_events(
+    keys: dict, client: TestClient, session: Session, engineer: dict
+) -> None:
+    """An implausible or unregistered value is refused by the API (422) and not stored from
+    an event either (the raw event is kept, the answer says why)."""
+    implausible = _measure(client, engineer, values={"door_close_s": 3e9})
+    assert implausible.status_code == 422
+    assert "outside its plausible range" in implausible.json()["detail"]
+    misspelt = _measure(client, engineer, values={"door_closse_s": 2.4})
+    assert misspelt.status_code == 422 and "did you mean 'door_close_s'" in misspelt.text
+    body = event("m-1", "measurement", at=T0.isoformat(), car="0117", values={"door_close_s": 3e9})
+    answer = client.post("/api/v1/events", json=body, headers=keys["D-bench"])
+    assert answer.status_code == 201
+    assert answer.json()["measurements"] == 0 and "door_close_s" in answer.json()["refused"]
+    assert session.scalars(select(Measurement)).all() == []
+    # The engineer narrows the plausible range: a value inside the default range is refused.
+    band = {**BAND, "plausible_lower": 1.0, "plausible_upper": 4.0}
+    assert (
+        client.put(
+            "/api/v1/maintenance/parameters/door_close_s", json=band, headers=engineer
+        ).status_code
+        == 200
+    )
+    assert _measure(client, engineer, values={"door_close_s": 5.5}).status_code == 422
+    assert _measure(client, engineer, values={"door_close_s": 3.9}).status_code == 201

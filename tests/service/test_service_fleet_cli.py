@@ -17,7 +17,7 @@ from service.fleet import schedule
 from service.fleet.models import Forecast, Measurement
 from service.fleet.service import measured_values
 from tests.conftest import ADMIN
-from tests.service.linekit import build_line
+from tests.service.linekit import build_line, register_bands
 
 WIDE = """car,taken_at,door_close_s,brake_release_s
 0117,2026-11-01T07:30:00Z,2.41,4.02
@@ -30,6 +30,7 @@ WIDE = """car,taken_at,door_close_s,brake_release_s
 def db(client: TestClient, session: Session, monkeypatch: pytest.MonkeyPatch) -> sessionmaker:
     """The CLI's sessions on the test's connection, inside its rolled-back transaction."""
     build_line(client)
+    register_bands(client)
     factory = sessionmaker(bind=session.connection(), join_transaction_mode="create_savepoint")
     monkeypatch.setattr(commands, "get_sessionmaker", lambda: factory)
     return factory
@@ -80,6 +81,25 @@ def test_import_long_csv(db, session: Session, tmp_path: Path, capsys) -> None:
         (WIDE.replace("2026-11-01T08:00:00Z", "2026-11-01 08:00"), "has no offset"),
         (WIDE.replace("2026-11-01T08:00:00Z", "yesterday"), "'yesterday' is not an ISO 8601"),
         ("car,taken_at,door_close_s\n", "holds no measurements"),
+        # the issue's cases: a misspelt column, a decimal comma, an implausible value
+        (
+            WIDE.replace("door_close_s", "door_closse_s"),
+            "column door_closse_s: 'door_closse_s'"
+            " is not a registered parameter; did you mean 'door_close_s'?",
+        ),
+        (
+            WIDE.replace("2.41,4.02", "3,1,4.02"),
+            "line 2: 5 fields for 4 columns — a decimal comma?",
+        ),
+        (
+            WIDE.replace("0118,2026-11-01T08:00:00Z,2.38,3.97", "0118,2026-11-01T08:00:00Z,2.38"),
+            "line 4: fewer fields than the 4 columns",
+        ),
+        (
+            WIDE.replace("2.45", "3e9"),
+            "line 3, column door_close_s: door_close_s = 3e+09 s is"
+            " outside its plausible range -2.6…7.4 s",
+        ),
     ],
 )
 def test_bad_csv_is_refused_whole(
@@ -89,6 +109,24 @@ def test_bad_csv_is_refused_whole(
     err = capsys.readouterr().err
     assert expected in err, err
     assert _count(session) == 0  # nothing imported
+
+
+def test_importing_the_same_file_again_stores_nothing_twice(
+    db, session: Session, tmp_path: Path, capsys
+) -> None:
+    path = _csv(tmp_path, WIDE)
+    assert depot("import-measurements", path) == 0
+    capsys.readouterr()
+    assert depot("import-measurements", path) == 0
+    again = capsys.readouterr().out
+    assert "imported 0 tests (0 measurements)" in again and "3 already stored, skipped" in again
+    assert _count(session) == 3
+    changed = _csv(tmp_path, WIDE.replace("2.41", "2.42"))
+    assert depot("import-measurements", changed) == 2
+    assert "car 0117 at 2026-11-01T07:30:00+00:00 is stored with other values" in (
+        capsys.readouterr().err
+    )
+    assert _count(session) == 3
 
 
 def test_missing_file(db, tmp_path: Path, capsys) -> None:

@@ -232,3 +232,50 @@ def test_review_fleet_page_behind_login(stored: list[str], client: TestClient) -
     assert "“compressor fill time creeping up”" in decided.text
     body = client.get(f"/api/v1/cars/{stored[1]}/forecast", headers=ADMIN).json()
     assert body["decision"] == "withdraw_now" and body["override"]["actor"] == "admin"
+
+
+def test_fleet_page_filters_pages_and_sets_withdrawn_cars_apart(
+    stored: list[str], client: TestClient
+) -> None:
+    client.post("/review/login", data={"token": ADMIN["Authorization"][7:]})
+    fleet = client.get("/api/v1/maintenance/fleet", headers=ADMIN).json()
+    assert [c["rank"] for c in fleet["cars"]] == list(range(1, len(stored) + 1))
+    for car in fleet["cars"]:  # a car out of its band now is never "expected out … ahead"
+        if car["out_of_band_now"]:
+            assert car["reasons"][0].startswith("already outside its band"), car["reasons"]
+        assert not any("1 tests" in reason for reason in car["reasons"]), car["reasons"]
+    html = client.get("/review/fleet").text
+    assert "is <b>faulty</b> when" in html and 'id="legend"' in html
+    one = client.get(f"/review/fleet?car={stored[0]}").text
+    assert f'data-car="{stored[0]}"' in one and f'data-car="{stored[1]}"' not in one
+    assert f"1 of {len(stored)} cars in service" in one
+    withdrawn = client.post(
+        f"/api/v1/cars/{stored[2]}/maintenance-decision",
+        json={"action": "withdraw_now", "reason": "wheel flat, sent to the shop"},
+        headers=ADMIN,
+    )
+    assert withdrawn.status_code == 201
+    fleet = client.get("/api/v1/maintenance/fleet", headers=ADMIN).json()
+    assert stored[2] not in [c["car"] for c in fleet["cars"]]
+    assert [c["car"] for c in fleet["withdrawn"]] == [stored[2]]
+    assert [c["rank"] for c in fleet["cars"]] == list(range(1, len(stored)))
+    html = client.get("/review/fleet").text
+    assert f'data-car="{stored[2]}"' not in html and "Withdrawn from service (1)" in html
+    assert "wheel flat, sent to the shop" in html
+
+
+def test_fleet_page_pages_a_large_fleet(client: TestClient, session: Session) -> None:
+    from service.fleet import review
+
+    keys = build_line(client)
+    cars = [f"P{n:03d}" for n in range(review.PAGE_SIZE + 5)]
+    for car in cars:
+        post_ok(client, "/api/v1/cars", {"id": car})
+    load_fleet_history(client, ADMIN, keys["D-bench"], cars, end=END)
+    total = len(client.get("/api/v1/maintenance/fleet", headers=ADMIN).json()["cars"])
+    assert review.PAGE_SIZE < total <= 2 * review.PAGE_SIZE  # the line's own cars too
+    client.post("/review/login", data={"token": ADMIN["Authorization"][7:]})
+    first = client.get("/review/fleet").text
+    assert first.count("data-car=") == review.PAGE_SIZE and "page 1 of 2" in first
+    second = client.get("/review/fleet?page=2").text
+    assert second.count("data-car=") == total - review.PAGE_SIZE and "← previous" in second

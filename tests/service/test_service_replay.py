@@ -25,7 +25,7 @@ def snapshot_of_state(client: TestClient) -> dict[str, Any]:
 
 
 def test_replay_rebuilds_the_same_state(client: TestClient, session: Session) -> None:
-    assert features.LOADED
+    features.install()
     line = Line(client, build_line(client))
     arrive = T0 + timedelta(minutes=20)
     line.heartbeat_all(T0 - timedelta(seconds=20))

@@ -7,9 +7,9 @@ from pathlib import Path
 import httpx
 import pytest
 
-from service.database import get_sessionmaker
+from core.database import get_sessionmaker
+from core.settings import get_settings
 from service.demo import load_demo
-from service.settings import get_settings
 from service.setup.service import create_user
 from tests.service.livekit import live_server
 

@@ -7,11 +7,19 @@ import itertools
 import pytest
 
 from service.clearance.rules import (
+    SECTION_STATE,
+    SWEEP_FROM,
     ConsistEvidence,
+    EotEvidence,
+    EotReading,
     RunEvidence,
     TailEvidence,
+    Verdict,
     decide,
+    departure_opens_sweep,
+    next_state,
     section_state,
+    sweep_clears_original,
 )
 
 PRESENT = TailEvidence("present", 0.93)
@@ -21,6 +29,16 @@ UNCERTAIN = TailEvidence("uncertain", 0.45)
 IDENTICAL = ConsistEvidence("identical", "consists identical (12 cars)")
 MISSING = ConsistEvidence("missing", "arrival consist lacks cars 0412, 0413 (positions 11–12)")
 UNKNOWN = ConsistEvidence("unknown", "positions 3, 7 unreadable")
+UNIT = 39572
+
+
+def eot(*pressures: int, unit: int | None = UNIT, other: int | None = None) -> EotEvidence:
+    """The train's unit ``unit`` reporting ``pressures`` in order, plus one report of ``other``."""
+    reports = [EotReading(UNIT, p) for p in pressures]
+    if other is not None:
+        reports.insert(0, EotReading(other, 88))
+    return EotEvidence(unit=unit, reports=tuple(reports))
+
 
 CASES = [
     # (name, evidence, verdict, a phrase that must be among the reasons)
@@ -96,6 +114,94 @@ CASES = [
         "incomplete",
         "4 missing",
     ),
+    # End-of-train telemetry (clearance.md, "End-of-train telemetry").
+    (
+        "EOT at pressure stands in for a missing tail image",
+        RunEvidence(eot=eot(89)),
+        "complete",
+        "EOT unit 39572 at the rear reports 89 psig at arrival",
+    ),
+    (
+        "EOT at exactly 45 psig stands in",
+        RunEvidence(eot=eot(45), consist=IDENTICAL),
+        "complete",
+        "45 psig",
+    ),
+    (
+        "EOT stands in for an uncertain tail",
+        RunEvidence(UNCERTAIN, eot=eot(70)),
+        "complete",
+        "the EOT unit stands in",
+    ),
+    ("EOT 44 psig is not enough", RunEvidence(eot=eot(44)), "undetermined", "only 44 psig"),
+    (
+        "EOT 44 psig doubts even a present tail",
+        RunEvidence(PRESENT, eot=eot(44)),
+        "undetermined",
+        "only 44 psig",
+    ),
+    (
+        "EOT vented proves loss",
+        RunEvidence(PRESENT, eot=eot(4)),
+        "incomplete",
+        "brake pipe vented at the rear: the train may have parted",
+    ),
+    ("EOT vented at 0", RunEvidence(eot=eot(90, 0)), "incomplete", "reports 0 psig"),
+    ("EOT 5 psig is not a vent", RunEvidence(eot=eot(5)), "undetermined", "only 5 psig"),
+    (
+        "the last report counts: recharged after a dip",
+        RunEvidence(eot=eot(2, 80)),
+        "complete",
+        "80 psig",
+    ),
+    (
+        "another unit is ignored with a reason",
+        RunEvidence(eot=eot(unit=UNIT, other=10690)),
+        "undetermined",
+        "EOT unit 10690 is not this train's unit (39572): its report is ignored",
+    ),
+    (
+        "another unit cannot stand in",
+        RunEvidence(eot=eot(unit=UNIT, other=10690)),
+        "undetermined",
+        "no report from EOT unit 39572 at arrival",
+    ),
+    (
+        "another unit's vent proves nothing",
+        RunEvidence(PRESENT, eot=EotEvidence(UNIT, (EotReading(10690, 0),))),
+        "complete",
+        "is ignored",
+    ),
+    (
+        "no unit armed: every report ignored",
+        RunEvidence(eot=eot(unit=None, other=10690)),
+        "undetermined",
+        "no EOT unit was armed on this train: ignored",
+    ),
+    (
+        "EOT missing leaves the tail to decide",
+        RunEvidence(PRESENT, eot=eot()),
+        "complete",
+        "tail disc present",
+    ),
+    (
+        "EOT cannot outvote a missing car",
+        RunEvidence(consist=MISSING, eot=eot(89)),
+        "incomplete",
+        "lacks cars",
+    ),
+    (
+        "EOT does not overrule a weak absent tail",
+        RunEvidence(ABSENT_WEAK, eot=eot(89)),
+        "undetermined",
+        "low confidence",
+    ),
+    (
+        "EOT does not overrule a stale device",
+        RunEvidence(stale_devices=("B-eot",), eot=eot(89)),
+        "undetermined",
+        "B-eot is silent",
+    ),
 ]
 
 
@@ -151,3 +257,120 @@ def test_every_combination_is_safe(departure_tail: TailEvidence | None) -> None:
         )
         expected = "incomplete" if proves_loss else "complete" if agrees else "undetermined"
         assert verdict == expected, evidence
+
+
+EOTS = [
+    None,
+    eot(),
+    eot(89),
+    eot(45),
+    eot(44),
+    eot(5),
+    eot(4),
+    eot(89, 0),
+    eot(0, 89),
+    eot(unit=UNIT, other=10690),
+    eot(unit=None, other=10690),
+]
+
+
+@pytest.mark.parametrize("eot_evidence", EOTS)
+def test_every_combination_with_eot_is_safe(eot_evidence: EotEvidence | None) -> None:
+    """With EOT in the evidence: "complete" needs the tail present or the own unit's last
+    report ≥ 45 psig; the own unit's last report < 5 psig always proves loss; other units'
+    reports never change the verdict."""
+    own = (
+        []
+        if eot_evidence is None
+        else [r for r in eot_evidence.reports if r.unit_address == eot_evidence.unit]
+    )
+    last = own[-1].pressure_psig if own else None
+    for arrival, departure, consist, (dep, arr), stale in itertools.product(
+        TAILS, TAILS, CONSISTS, AXLES, [(), ("X",)]
+    ):
+        evidence = RunEvidence(arrival, departure, consist, dep, arr, stale, eot_evidence)
+        verdict = decide(evidence).verdict
+        proves_loss = (
+            (arrival is ABSENT_SURE)
+            or (arrival in (ABSENT_SURE, ABSENT_WEAK) and departure is PRESENT)
+            or consist is MISSING
+            or (dep is not None and arr is not None and arr < dep)
+            or (last is not None and last < 5)
+        )
+        whole = arrival is PRESENT or (
+            last is not None and last >= 45 and arrival in (None, UNCERTAIN)
+        )
+        agrees = (
+            whole
+            and consist in (None, IDENTICAL)
+            and not stale
+            and (dep is None or arr is None or dep == arr)
+            and (last is None or last >= 45)
+        )
+        expected = "incomplete" if proves_loss else "complete" if agrees else "undetermined"
+        assert verdict == expected, evidence
+
+
+STATES = ["free", "occupied", "awaiting_confirmation", "review", "alarm", "blocked",
+          "awaiting_sweep"]  # fmt: skip
+VERDICTS: list[Verdict] = ["complete", "incomplete", "undetermined"]
+
+
+@pytest.mark.parametrize(
+    ("current", "verdict", "mode", "state"),
+    [
+        # a sweep run holds the section as "occupied" and follows the normal table
+        ("occupied", "complete", "primary", "free"),
+        ("occupied", "complete", "auxiliary", "awaiting_confirmation"),
+        ("occupied", "incomplete", "primary", "alarm"),
+        ("occupied", "undetermined", "primary", "review"),
+        ("occupied", "undetermined", "auxiliary", "review"),
+        # awaiting a sweep: only proof of loss moves it (to alarm); doubt or proof do not free it
+        ("awaiting_sweep", "complete", "primary", "awaiting_sweep"),
+        ("awaiting_sweep", "undetermined", "primary", "awaiting_sweep"),
+        ("awaiting_sweep", "incomplete", "primary", "alarm"),
+        ("blocked", "incomplete", "primary", "blocked"),
+        ("alarm", "complete", "primary", "alarm"),
+    ],
+)
+def test_next_state_table(current: str, verdict: str, mode: str, state: str) -> None:
+    assert next_state(current, verdict, mode) == state  # type: ignore[arg-type]
+
+
+def test_sweep_is_asked_only_where_nothing_proves_the_section_empty() -> None:
+    assert {"alarm", "review", "blocked"} == SWEEP_FROM
+    assert {s for s in STATES if departure_opens_sweep(s)} == {"awaiting_sweep"}
+    assert [v for v in VERDICTS if sweep_clears_original(v)] == ["complete"]
+    assert not sweep_clears_original(None)
+
+
+@pytest.mark.parametrize("mode", ["primary", "auxiliary"])
+def test_a_sweep_run_that_is_not_complete_never_frees_the_section(mode: str) -> None:
+    """Exhaustive over every evidence combination (with and without EOT) and every sequence of
+    up to three re-decisions of the sweep run: the section reaches ``free`` only by a decision
+    ``complete``, and the original run counts as cleared only when the sweep is complete."""
+    verdicts: set[str] = set()
+    for arrival, departure, consist, (dep, arr), stale, eot_evidence in itertools.product(
+        TAILS, TAILS, CONSISTS, AXLES, [(), ("X",)], EOTS
+    ):
+        evidence = RunEvidence(arrival, departure, consist, dep, arr, stale, eot_evidence)
+        verdict = decide(evidence).verdict
+        verdicts.add(verdict)
+        after = next_state("occupied", verdict, mode)  # the sweep run held the section
+        assert (after == "free") == (verdict == "complete" and mode == "primary"), evidence
+        assert sweep_clears_original(verdict) == (verdict == "complete")
+    assert verdicts == set(VERDICTS)
+    for sequence in itertools.product(VERDICTS, repeat=3):
+        state = "occupied"
+        for step in sequence:
+            before = state
+            state = next_state(state, step, mode)
+            if state == "free" and before != "free":
+                assert step == "complete", sequence
+
+
+def test_awaiting_sweep_is_never_freed_by_the_swept_run_itself() -> None:
+    """Late evidence re-deciding the original run, whatever it says, never frees a section
+    that awaits its sweep train (only the sweep run or a dispatcher's clear can)."""
+    for verdict, mode in SECTION_STATE:
+        assert next_state("awaiting_sweep", verdict, mode) in ("awaiting_sweep", "alarm")  # type: ignore[arg-type]

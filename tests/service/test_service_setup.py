@@ -6,8 +6,8 @@ from fastapi.testclient import TestClient
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from service.auth import hash_secret
-from service.setup.models import Device, User
+from core.auth import hash_secret
+from core.models import Device, User
 from service.setup.service import create_user
 from tests.conftest import ADMIN
 from tests.service.linekit import build_line, post_ok
@@ -84,7 +84,7 @@ def test_production_refuses_unsafe_defaults() -> None:
     import pytest
     from pydantic import ValidationError
 
-    from service.settings import Settings
+    from core.settings import Settings
 
     with pytest.raises(ValidationError, match="DEPOT_ADMIN_TOKEN"):
         Settings(environment="production", admin_token="dev-admin-token")

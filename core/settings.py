@@ -34,6 +34,12 @@ class Settings(BaseSettings):
         default=None, gt=0, description="seconds between scheduled forecasts"
     )
     review_refresh_s: int = Field(default=10, ge=2)
+    # How long a worker trusts a device key it has looked up: the revocation bound (≤ 5 s).
+    device_key_ttl_s: float = Field(default=2.0, ge=0, le=5)
+    # Group commit of single events: how long the first event waits for neighbours (0: off),
+    # and how many events share one transaction at most.
+    group_commit_ms: float = Field(default=2.0, ge=0, le=50)
+    group_commit_max: int = Field(default=64, ge=1, le=1000)
     host: str = "127.0.0.1"
     port: int = 8000
 

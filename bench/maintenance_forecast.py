@@ -1,6 +1,6 @@
 """Benchmark of the maintenance package: speed, method comparison, real-data check.
 
-Run: .venv/bin/python bench/maintenance.py
+Run: .venv/bin/python -m bench.maintenance_forecast
 
 1. Computation throughput (20 parameters × 200 measurements per car, 30-step
    horizon): ``assess_car`` with fleet weights, with per-car prediction
@@ -12,20 +12,17 @@ Run: .venv/bin/python bench/maintenance.py
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
+from maintenance import METHODS, assess_fleet, calibrate_fleet
+from maintenance.cmapss import PUBLISHED_RMSE, evaluate_fd001
+from maintenance.fleet import assess_car, rank_fleet
+from maintenance.simulate import simulate_fleet
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from maintenance import METHODS, assess_fleet, calibrate_fleet  # noqa: E402
-from maintenance.cmapss import PUBLISHED_RMSE, evaluate_fd001  # noqa: E402
-from maintenance.fleet import assess_car, rank_fleet  # noqa: E402
-from maintenance.simulate import simulate_fleet  # noqa: E402
-
 CMAPSS = ROOT.parent / "shared" / "data" / "real" / "cmapss_fd001"
 
 
@@ -42,7 +39,7 @@ def throughput() -> None:
         n = 1000 if "fleet" in label else 300
         t0, c0 = time.perf_counter(), time.process_time()
         out = [
-            assess_car(h, times=fleet.times, band=fleet.bands, window=40, **kwargs)  # type: ignore[arg-type]
+            assess_car(h, times=fleet.times, band=fleet.bands, window=40, **kwargs)
             for h in fleet.histories[:n]
         ]
         dt, cpu = time.perf_counter() - t0, time.process_time() - c0

@@ -7,7 +7,7 @@ from datetime import datetime
 from sqlalchemy import ForeignKey, Integer, String
 from sqlalchemy.orm import Mapped, mapped_column
 
-from service.database import Base, UTCDateTime, utcnow
+from core.database import Base, UTCDateTime, utcnow
 
 DEVICE_KINDS = (
     "interlocking",
@@ -18,9 +18,18 @@ DEVICE_KINDS = (
     "marking_station",
     "test_bench",
     "onboard_unit",
+    "eot_receiver",
 )
 ROLES = ("dispatcher", "engineer")
-SECTION_STATES = ("free", "occupied", "awaiting_confirmation", "review", "alarm", "blocked")
+SECTION_STATES = (
+    "free",
+    "occupied",
+    "awaiting_confirmation",
+    "review",
+    "alarm",
+    "blocked",
+    "awaiting_sweep",
+)
 
 
 class Station(Base):
@@ -58,6 +67,8 @@ class Device(Base):
     # Latest device time (`occurred_at`) of anything the device sent: the heartbeat clock.
     last_seen_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
     created_at: Mapped[datetime] = mapped_column(UTCDateTime(), default=utcnow)
+    # Set once: from then on the device's events are refused (401); its history stays.
+    decommissioned_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
 
 
 class Car(Base):
@@ -78,3 +89,21 @@ class User(Base):
     role: Mapped[str] = mapped_column(String(16))
     token_hash: Mapped[str] = mapped_column(String(64), unique=True)
     created_at: Mapped[datetime] = mapped_column(UTCDateTime(), default=utcnow)
+    # A token past `expires_at`, or of a revoked person, is refused (401).
+    expires_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+    revoked_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+
+
+class CredentialChange(Base):
+    """Append-only audit of credentials: people added, rotated, revoked; device keys rotated,
+    devices decommissioned. Secrets are never recorded."""
+
+    __tablename__ = "credential_changes"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    recorded_at: Mapped[datetime] = mapped_column(UTCDateTime(), default=utcnow)
+    actor: Mapped[str] = mapped_column(String(64))
+    action: Mapped[str] = mapped_column(String(32))
+    subject_kind: Mapped[str] = mapped_column(String(16))  # "user" | "device"
+    subject: Mapped[str] = mapped_column(String(64), index=True)
+    detail: Mapped[str] = mapped_column(String(500), default="")

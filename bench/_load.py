@@ -1,0 +1,172 @@
+"""The load generator of the ingest benchmark: ``wrk`` with a Lua script, else a Python client.
+
+``wrk`` comes from Debian: ``apt-get install -y wrk``. Both generators post the same bodies
+(unique ``event_id`` per request, device keys in rotation) for a fixed time with a fixed number
+of connections, and report requests, the p50/p99 latency and anything not acknowledged.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import shutil
+import statistics
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import httpx
+
+LUA = r"""
+local keys = {%(keys)s}
+local prefix = "%(prefix)s"
+local batch = %(batch)d
+local counter = 0
+local threads = 0
+local me = 0
+
+function setup(thread)
+  threads = threads + 1
+  thread:set("me", threads)
+end
+
+local function event(id, kind)
+  if kind == "heartbeat" then
+    return '{"event_id":"' .. id .. '","occurred_at":"2026-11-23T10:00:00Z","kind":"heartbeat"}'
+  end
+  return '{"event_id":"' .. id .. '","occurred_at":"2026-11-23T10:00:00Z",'
+    .. '"kind":"axle_count","section":"AB","axles":' .. (4 * (counter %% 50)) .. '}'
+end
+
+request = function()
+  counter = counter + 1
+  local key = keys[(counter + me) %% #keys + 1]
+  local id = prefix .. "-" .. me .. "-" .. counter
+  local body
+  if batch == 0 then
+    body = event(id, "axle_count")
+  else
+    local parts = {}
+    for n = 1, batch do parts[n] = event(id .. "-" .. n, "heartbeat") end
+    body = '{"events":[' .. table.concat(parts, ",") .. ']}'
+  end
+  return wrk.format("POST", "/api/v1/events",
+    {["Content-Type"] = "application/json", ["X-Device-Key"] = key}, body)
+end
+
+done = function(summary, latency, requests)
+  local e = summary.errors
+  io.write(string.format(
+    'WRK {"requests":%%d,"duration_us":%%d,"failed":%%d,"p50_us":%%d,"p99_us":%%d}\n',
+    summary.requests, summary.duration, e.connect + e.read + e.write + e.status + e.timeout,
+    latency:percentile(50), latency:percentile(99)))
+end
+"""
+
+
+@dataclass(frozen=True)
+class Round:
+    """One timed round against one server: acknowledged requests and their latency."""
+
+    requests: int
+    seconds: float
+    failed: int
+    p50_ms: float
+    p99_ms: float
+
+
+def have_wrk() -> bool:
+    return shutil.which("wrk") is not None
+
+
+def _wrk(
+    url: str, keys: list[str], prefix: str, *, batch: int, connections: int, seconds: float
+) -> Round:
+    script = LUA % {
+        "keys": ", ".join(f'"{k}"' for k in keys),
+        "prefix": prefix,
+        "batch": batch,
+    }
+    with tempfile.NamedTemporaryFile("w", suffix=".lua", delete=False) as handle:
+        handle.write(script)
+    try:
+        done = subprocess.run(
+            ["wrk", "-t2", f"-c{connections}", f"-d{seconds:g}s", "--timeout", "30s",
+             "-s", handle.name, url],
+            capture_output=True, text=True, check=True, timeout=seconds + 60,
+        )  # fmt: skip
+    finally:
+        Path(handle.name).unlink()
+    line = next(x for x in done.stdout.splitlines() if x.startswith("WRK "))
+    figures = json.loads(line[4:])
+    return Round(
+        requests=figures["requests"] - figures["failed"],
+        seconds=figures["duration_us"] / 1e6,
+        failed=figures["failed"],
+        p50_ms=figures["p50_us"] / 1000,
+        p99_ms=figures["p99_us"] / 1000,
+    )
+
+
+def _body(prefix: str, n: int, batch: int) -> dict[str, object]:
+    if batch == 0:
+        return {
+            "event_id": f"{prefix}-{n}",
+            "occurred_at": "2026-11-23T10:00:00Z",
+            "kind": "axle_count",
+            "section": "AB",
+            "axles": 4 * (n % 50),
+        }
+    return {
+        "events": [
+            {"event_id": f"{prefix}-{n}-{k}", "occurred_at": "2026-11-23T10:00:00Z",
+             "kind": "heartbeat"}
+            for k in range(batch)
+        ]
+    }  # fmt: skip
+
+
+async def _python(
+    url: str, keys: list[str], prefix: str, *, batch: int, connections: int, seconds: float
+) -> Round:
+    latencies: list[float] = []
+    failed = 0
+    deadline = time.perf_counter() + seconds
+
+    async def connection(c: int, client: httpx.AsyncClient) -> None:
+        nonlocal failed
+        n = 0
+        while time.perf_counter() < deadline:
+            n += 1
+            start = time.perf_counter()
+            response = await client.post(
+                "/api/v1/events",
+                json=_body(f"{prefix}-{c}", n, batch),
+                headers={"X-Device-Key": keys[(n + c) % len(keys)]},
+            )
+            if response.status_code in (200, 201):
+                latencies.append(time.perf_counter() - start)
+            else:
+                failed += 1
+
+    limits = httpx.Limits(max_connections=connections)
+    async with httpx.AsyncClient(base_url=url, limits=limits, timeout=30) as client:
+        start = time.perf_counter()
+        await asyncio.gather(*(connection(c, client) for c in range(connections)))
+        elapsed = time.perf_counter() - start
+    q = statistics.quantiles(latencies, n=100) if len(latencies) > 2 else [0.0] * 99
+    return Round(len(latencies), elapsed, failed, q[49] * 1000, q[98] * 1000)
+
+
+def drive(
+    url: str, keys: list[str], prefix: str, *, batch: int, connections: int, seconds: float
+) -> Round:
+    """One round of load; ``batch`` 0 posts single ``axle_count`` events, else batches of
+    ``batch`` heartbeats."""
+    if have_wrk():
+        return _wrk(url, keys, prefix, batch=batch, connections=connections, seconds=seconds)
+    return asyncio.run(
+        _python(url, keys, prefix, batch=batch, connections=connections, seconds=seconds)
+    )

@@ -1,0 +1,130 @@
+"""Raw event rows at the statement level: one insert per event or per batch, answers in bulk.
+
+Core statements on the ``raw_events`` table (no ORM unit of work): the unique key
+``(device_id, event_id)`` decides duplicates inside the insert itself, so concurrent retries of
+one event cannot both win, and a duplicate costs no failed statement.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from typing import Any
+
+from sqlalchemy import Table, bindparam, select, text, update
+from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.orm import Session
+
+from core.database import utcnow
+from core.models import Device
+from ingest.models import RawEvent
+
+RAW: Table = RawEvent.__table__  # type: ignore[assignment]
+# A transport column is added by the MQTT/NATS bridges; rows carry it once it exists.
+HAS_TRANSPORT = "transport" in RAW.c
+COLUMNS = ("device_id", "event_id", "kind", "occurred_at", "received_at", "section")
+UNNEST_INSERT = text(
+    "INSERT INTO raw_events (device_id, event_id, kind, occurred_at, received_at, section,"
+    " body, body_sha256, result)"
+    " SELECT d, e, k, o, r, s, CAST(b AS json), h, CAST(res AS json) FROM unnest("
+    " CAST(:device_id AS text[]), CAST(:event_id AS text[]), CAST(:kind AS text[]),"
+    " CAST(:occurred_at AS timestamptz[]), CAST(:received_at AS timestamptz[]),"
+    " CAST(:section AS text[]), CAST(:body AS text[]), CAST(:body_sha256 AS text[]),"
+    " CAST(:result AS text[])) AS u(d, e, k, o, r, s, b, h, res)"
+    " ON CONFLICT (device_id, event_id) DO NOTHING RETURNING id, device_id, event_id"
+)
+
+
+def canonical_sha256(body: dict[str, Any]) -> str:
+    text_ = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=False, default=str)
+    return hashlib.sha256(text_.encode()).hexdigest()
+
+
+def raw_values(
+    device: Device,
+    event: Any,
+    body: dict[str, Any],
+    *,
+    answer: dict[str, Any] | None,
+    transport: str = "http",
+) -> dict[str, Any]:
+    """The row of one event; ``answer`` is stored with it when known before derivation."""
+    values = {
+        "device_id": device.id,
+        "event_id": event.event_id,
+        "kind": event.kind,
+        "occurred_at": event.occurred_at,
+        "received_at": utcnow(),
+        "section": getattr(event, "section", None),
+        "body": body,
+        "body_sha256": canonical_sha256(body),
+        "result": answer or {},
+    }
+    if HAS_TRANSPORT:
+        values["transport"] = transport
+    return values
+
+
+def _insert(session: Session) -> Any:
+    module = postgresql if session.get_bind().dialect.name == "postgresql" else sqlite
+    return module.insert(RAW).on_conflict_do_nothing(index_elements=["device_id", "event_id"])
+
+
+def insert_one(session: Session, values: dict[str, Any]) -> int | None:
+    """Insert unless (device, event_id) exists: the new row's id, or None for a duplicate."""
+    statement = _insert(session).values(**values).returning(RAW.c.id)
+    return session.execute(statement).scalar_one_or_none()
+
+
+def insert_many(session: Session, rows: list[dict[str, Any]]) -> dict[tuple[str, str], int]:
+    """Insert the new rows in one statement; returns their ids by (device, ``event_id``).
+
+    PostgreSQL gets ``INSERT … SELECT FROM unnest(arrays)``: one statement of constant text
+    whatever the batch size, so neither SQLAlchemy nor the server compiles 500 VALUES tuples.
+    """
+    if not rows:
+        return {}
+    if session.get_bind().dialect.name != "postgresql" or HAS_TRANSPORT:
+        statement = _insert(session).returning(RAW.c.id, RAW.c.device_id, RAW.c.event_id)
+        return {(d, e): i for i, d, e in session.execute(statement, rows)}
+    arrays: dict[str, list[Any]] = {c: [r[c] for r in rows] for c in COLUMNS}
+    arrays["body_sha256"] = [r["body_sha256"] for r in rows]
+    arrays["body"] = [json.dumps(r["body"]) for r in rows]
+    arrays["result"] = [json.dumps(r["result"]) for r in rows]
+    return {(d, e): i for i, d, e in session.execute(UNNEST_INSERT, arrays)}
+
+
+def stored(session: Session, device_id: str, event_id: str) -> tuple[str, dict[str, Any]]:
+    """(body hash, answer) of an event stored before."""
+    row = session.execute(
+        select(RAW.c.body_sha256, RAW.c.result).where(
+            RAW.c.device_id == device_id, RAW.c.event_id == event_id
+        )
+    ).one()
+    return row[0], row[1]
+
+
+def write_answers(session: Session, answers: list[dict[str, Any]]) -> None:
+    """Store derived answers (``id``, ``result``, ``derive_error``) with one executemany,
+    which psycopg sends as one pipeline; cleared afterwards."""
+    if not answers:
+        return
+    statement = (
+        update(RAW)
+        .where(RAW.c.id == bindparam("raw_id"))
+        .values(
+            result=bindparam("answer", type_=RAW.c.result.type),
+            derive_error=bindparam("error", type_=RAW.c.derive_error.type),
+        )
+    )
+    session.execute(
+        statement,
+        [{"raw_id": a["id"], "answer": a["result"], "error": a["derive_error"]} for a in answers],
+    )
+    answers.clear()
+
+
+def as_raw(raw_id: int, values: dict[str, Any]) -> RawEvent:
+    """A stand-in for the stored row, for derivations (which only read it)."""
+    fields = {k: v for k, v in values.items() if k != "transport"}
+    return RawEvent(id=raw_id, derive_error=None, **fields)

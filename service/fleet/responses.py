@@ -1,0 +1,128 @@
+"""Typed answers of the maintenance API (the OpenAPI document shows every field).
+
+Fields that the forecast payload adds as the methods grow are allowed through
+(``extra="allow"``); the documented fields are the contract.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from core.schemas import Instant
+
+
+class Answer(BaseModel):
+    model_config = ConfigDict(extra="allow")
+
+
+class MeasurementsStored(Answer):
+    car: str
+    taken_at: Instant
+    measurements: int = Field(description="how many parameter values were stored")
+
+
+class ParameterOut(Answer):
+    name: str
+    nominal: float
+    tolerance: float
+    lower: float = Field(description="nominal − tolerance: the band's lower edge")
+    upper: float = Field(description="nominal + tolerance: the band's upper edge")
+    unit: str
+    description: str | None = None
+    plausible_lower: float = Field(description="values below this are refused")
+    plausible_upper: float = Field(description="values above this are refused")
+
+
+class CarRisk(Answer):
+    car: str
+    risk: float | None
+
+
+class ForecastRunOut(Answer):
+    computed_at: Instant
+    cars: int
+    statuses: dict[str, int]
+    calibration: Any = Field(description="how the index band and weights were calibrated")
+    highest_risk: list[CarRisk]
+
+
+class OverrideOut(Answer):
+    id: int
+    car: str
+    action: str
+    reason: str
+    actor: str
+    recorded_at: Instant
+    forecast_since: bool = Field(description="a newer forecast exists than this decision")
+
+
+class ExitStep(Answer):
+    step: int
+    at: Instant | None
+
+
+class ForecastStep(Answer):
+    step: int
+    at: Instant | None
+    value: float
+    lower: float
+    upper: float
+
+
+class IndexForecast(Answer):
+    level: float | None
+    steps: list[ForecastStep]
+
+
+class CarSummary(Answer):
+    car: str
+    forecast_id: int
+    computed_at: Instant
+    status: str
+    risk: float | None = Field(description="probability of leaving the band within the horizon")
+    recommendation: str = Field(description="plan_withdrawal, watch, serviceable or unknown")
+    decision: str
+    first_exit: ExitStep | None
+    out_of_band_now: bool = Field(description="the latest index already lies outside its band")
+    k_of_l_probability: float | None = None
+    reasons: list[str]
+    weights: dict[str, float]
+    contributions: dict[str, float]
+    override: OverrideOut | None
+
+
+class RankedCar(CarSummary):
+    rank: int
+
+
+class FleetOut(Answer):
+    computed_at: Instant | None
+    cars: list[RankedCar] = Field(description="cars in service, highest risk first")
+    withdrawn: list[CarSummary] = Field(description="cars an engineer withdrew from service")
+
+
+class IndexPoint(Answer):
+    at: Instant | None
+    index: float | None
+
+
+class BandOut(Answer):
+    lower: float
+    upper: float
+    unit: str
+
+
+class ForecastOut(CarSummary):
+    method: str | None
+    calibration: Any = Field(description="how the index band and weights were calibrated")
+    n_measurements: int
+    horizon: int | None
+    failure_k: int | None
+    index_band: Any
+    index_history: list[IndexPoint]
+    forecast: IndexForecast | None
+    parameter_exit_probability: dict[str, Any]
+    bands: dict[str, BandOut]
+    overrides: list[OverrideOut]

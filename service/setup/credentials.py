@@ -1,0 +1,137 @@
+"""People's tokens and device keys over their lifetime: add, list, rotate, revoke,
+decommission. Every change is an append-only `CredentialChange`; secrets are returned once
+and stored only hashed. Services flush; the request (or CLI command) owns the transaction.
+
+A rotated or revoked credential stops working at once for a person (tokens are checked on
+every request); a device key's in-process cache, where there is one, forgets it within its
+stated bound. There is no grace period: the old key stops with the rotation.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime, timedelta
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from core.auth import device_cache, hash_secret, new_secret
+from core.database import utcnow
+from core.errors import Conflict, NotFound, Unprocessable
+from core.models import ROLES, CredentialChange, Device, User
+
+
+def _record(
+    session: Session, actor: str, action: str, kind: str, subject: str, detail: str = ""
+) -> None:
+    session.add(
+        CredentialChange(
+            actor=actor, action=action, subject_kind=kind, subject=subject, detail=detail
+        )
+    )
+
+
+def _person(session: Session, name: str) -> User:
+    user = session.scalar(select(User).where(User.name == name))
+    if user is None:
+        raise NotFound(f"user {name!r} does not exist; `depot user list` shows who does")
+    return user
+
+
+def _expiry(days: float | None) -> datetime | None:
+    if days is None:
+        return None
+    if not 0 < days <= 3650:
+        raise Unprocessable("a token's lifetime must be between 0 and 3650 days")
+    return utcnow() + timedelta(days=days)
+
+
+def add_user(
+    session: Session, name: str, role: str, *, actor: str, expires_in_days: float | None = None
+) -> tuple[User, str]:
+    """A new person with a role; returns the row and the token (shown once)."""
+    if role not in ROLES:
+        raise Unprocessable(f"role must be one of {', '.join(ROLES)}")
+    existing = session.scalar(select(User).where(User.name == name))
+    if existing is not None:
+        hint = "rotate their token" if existing.revoked_at is None else "choose another name"
+        raise Conflict(f"user {name!r} already exists; {hint} (depot user rotate {name})")
+    token = new_secret()
+    user = User(
+        name=name, role=role, token_hash=hash_secret(token), expires_at=_expiry(expires_in_days)
+    )
+    session.add(user)
+    _record(session, actor, "user_added", "user", name, f"role {role}")
+    session.flush()
+    return user, token
+
+
+def list_users(session: Session) -> list[User]:
+    return list(session.scalars(select(User).order_by(User.name)))
+
+
+def rotate_user(
+    session: Session, name: str, *, actor: str, expires_in_days: float | None = None
+) -> tuple[User, str]:
+    """A new token for ``name`` (a lost one is replaced); the old one stops at once."""
+    user = _person(session, name)
+    if user.revoked_at is not None:
+        raise Conflict(f"user {name!r} was revoked; add them again under another name")
+    token = new_secret()
+    user.token_hash = hash_secret(token)
+    user.expires_at = _expiry(expires_in_days)
+    _record(session, actor, "user_rotated", "user", name)
+    session.flush()
+    return user, token
+
+
+def revoke_user(session: Session, name: str, *, actor: str) -> User:
+    """``name``'s token stops working at once; the person stays in the audit trail."""
+    user = _person(session, name)
+    if user.revoked_at is not None:
+        raise Conflict(f"user {name!r} is already revoked")
+    user.revoked_at = utcnow()
+    # The hash is replaced too, so even a cached copy of the old token matches nothing.
+    user.token_hash = hash_secret(new_secret())
+    _record(session, actor, "user_revoked", "user", name)
+    session.flush()
+    return user
+
+
+def _device(session: Session, device_id: str) -> Device:
+    device = session.get(Device, device_id)
+    if device is None:
+        raise NotFound(f"device {device_id!r} does not exist")
+    if device.decommissioned_at is not None:
+        raise Conflict(f"device {device_id!r} is decommissioned; register a new device")
+    return device
+
+
+def rotate_device_key(session: Session, device_id: str, *, actor: str) -> tuple[Device, str]:
+    """A new key for the device, shown once; the old key stops working (no grace period)."""
+    device = _device(session, device_id)
+    key = new_secret()
+    device.key_hash = hash_secret(key)
+    _record(session, actor, "device_key_rotated", "device", device_id)
+    session.flush()
+    device_cache().invalidate(device_id)  # this worker at once; the others within the TTL
+    return device, key
+
+
+def decommission_device(session: Session, device_id: str, *, actor: str) -> Device:
+    """The device's events are refused (401) from now on; its history stays."""
+    device = _device(session, device_id)
+    device.decommissioned_at = utcnow()
+    device.key_hash = hash_secret(new_secret())
+    _record(session, actor, "device_decommissioned", "device", device_id)
+    session.flush()
+    device_cache().invalidate(device_id)  # this worker at once; the others within the TTL
+    return device
+
+
+def changes(
+    session: Session, subject: str | None = None, limit: int = 200
+) -> list[CredentialChange]:
+    query = select(CredentialChange).order_by(CredentialChange.id.desc()).limit(limit)
+    if subject is not None:
+        query = query.where(CredentialChange.subject == subject)
+    return list(session.scalars(query))

@@ -1,0 +1,29 @@
+"""Typed answer of ``GET /trains/{train}/position`` (the filter's state, with units)."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from core.schemas import Instant
+
+
+class TrainPositionOut(BaseModel):
+    # The filter reports more diagnostics than documented here; they pass through.
+    model_config = ConfigDict(extra="allow")
+
+    train: str
+    updated_at: Instant = Field(description="device time of the newest sample applied")
+    t: float = Field(description="the on-board clock of that sample, s")
+    position_m: float = Field(description="coordinate along the line, m")
+    speed_mps: float = Field(description="speed along the line, m/s")
+    acceleration_mps2: float
+    direction: int = Field(description="1 forward, -1 backward, 0 standing")
+    sigma_position_m: float = Field(description="one standard deviation of the position, m")
+    sigma_speed_mps: float
+    position_known: bool = Field(description="false when the uncertainty is too large to use")
+    reader_on: bool
+    next_marker_id: str | None
+    distance_to_next_marker_m: float | None
+    last_marker_id: str | None
+    missed_marker_ids: list[str]
+    section: str | None
