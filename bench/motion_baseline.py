@@ -10,8 +10,9 @@ generated run in alternating rounds:
 * the updates per CPU-second of each, best of the rounds, and their ratio
   (this tree / the baseline) for the three sample mixes of ``bench/motion.py``.
 
-Run: ``python bench/motion_baseline.py [--baseline REV] [--rounds N]``; it
-needs git and the revision in this repository's history.
+Run: ``python -m bench.motion_baseline [--baseline REV] [--rounds N]``; it
+needs git and the revision in this repository's history (without them it
+says so and compares nothing).
 """
 
 from __future__ import annotations
@@ -30,11 +31,10 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from motion import fusion
+from motion import simulation as sim
 
-from motion import fusion  # noqa: E402
-from motion import simulation as sim  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 Args = tuple[float, float, float | None, float | None, str | None]
 
@@ -46,6 +46,7 @@ def _load_baseline(rev: str, into: Path) -> ModuleType:
         subprocess.run(
             ["git", "-C", str(ROOT), "archive", "--format=tar", rev, "motion"],
             stdout=out,
+            stderr=subprocess.PIPE,
             check=True,
         )
     with tarfile.open(archive) as tar:
@@ -120,7 +121,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rounds", type=int, default=5)
     args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
-        base = _load_baseline(args.baseline, Path(tmp))
+        try:
+            base = _load_baseline(args.baseline, Path(tmp))
+        except (OSError, subprocess.CalledProcessError) as exc:
+            print(f"no baseline to compare with: git archive {args.baseline} failed ({exc})")
+            print("  (run it in a clone that has that revision, or pass --baseline REV)")
+            return 0
         run = sim.generate_run(0)
         print(f"TrackFilter, this tree against {args.baseline}, {run.t.size} samples per pass")
         print(f"(updates per CPU-second, best of {args.rounds} alternating rounds):")
