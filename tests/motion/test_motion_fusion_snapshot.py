@@ -107,6 +107,30 @@ def test_snapshot_written_today_is_the_old_format_byte_for_byte() -> None:
     assert now["states_sha256"] == golden["states_sha256"]
 
 
+def test_config_fields_added_after_v1_are_written_only_when_tuned() -> None:
+    """A default-tuned filter writes the version-1 config (an older worker can
+    read it); a tuned one keeps its tuning across a snapshot."""
+    golden_config = json.loads(_golden()["snapshot"])["config"]
+    run = sim.generate_run(SEED)
+    events = _events(run)[:300]
+    default = _filter(run.table, run)
+    tuned = TrackFilter(
+        run.table,
+        FilterConfig(gnss_delay_s=run.delay_s, direction_sigmas=3.0, fix_offset_margin_m=80.0),
+    )
+    for args in events:
+        default.step(*args)
+        tuned.step(*args)
+    assert default.to_dict()["config"].keys() == golden_config.keys()
+    snap = tuned.to_dict()
+    assert snap["config"]["direction_sigmas"] == 3.0
+    assert (
+        snap["config"]["fix_offset_margin_m"] == 80.0 and "fix_offset_sigmas" not in snap["config"]
+    )
+    restored = TrackFilter.from_dict(json.loads(json.dumps(snap)), run.table)
+    assert restored.cfg == tuned.cfg and restored.state == tuned.state
+
+
 if __name__ == "__main__":
     GOLDEN.write_text(json.dumps(_record()) + "\n")
     sys.exit(0)
