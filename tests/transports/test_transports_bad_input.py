@@ -116,7 +116,10 @@ def _assert_acknowledged(line: Line, transport: str) -> None:
 
 def test_event_log_is_for_operators_and_pages_newest_first(line: Line) -> None:
     url = f"{line.servers[0].url}/api/v1/events"
-    device_key = {"X-Device-Key": line.devices[0].key}
+    device_key = {"X-Device-Key": next(d.key for d in line.devices if d.id == SENDER)}
+    for n in range(2):  # two events of its own, whatever ran before
+        body = _event(f"bad-log-{n}", occurred_at=f"2026-11-23T06:00:0{n}Z")
+        assert httpx.post(url, json=body, headers=device_key).status_code == 201
     assert httpx.get(url).status_code == 401
     assert httpx.get(url, headers=device_key).status_code == 403
     assert httpx.get(url, params={"limit": 1001}, headers=ADMIN_HEADERS).status_code == 422
