@@ -11,6 +11,7 @@ again after ``ack_wait``; one that failed ``max_deliver`` times goes, with the r
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import signal
 from dataclasses import dataclass
@@ -187,4 +188,7 @@ class Consumer:
                     continue
                 await self._handle(nc, js, msgs)
         finally:
-            await nc.drain()
+            # The acks already sent leave now; drain() can wait on the pull subscription.
+            with contextlib.suppress(nats.errors.Error, TimeoutError):
+                await nc.flush(timeout=5)
+            await nc.close()

@@ -110,3 +110,23 @@ def _assert_acknowledged(line: Line, transport: str) -> None:
         key = next(d.key for d in line.devices if d.id == SENDER)
         assert _ask(line, "mqtt", key, marker)["http_status"] == 201
     assert len(line.answers.bodies) == answered + (transport == "mqtt"), "a message came back"
+
+
+def test_event_log_is_for_operators_and_pages_newest_first(line: Line) -> None:
+    url = f"{line.servers[0].url}/api/v1/events"
+    device_key = {"X-Device-Key": next(d.key for d in line.devices if d.id == SENDER)}
+    for n in range(2):  # two events of its own, whatever ran before
+        body = _event(f"bad-log-{n}", occurred_at=f"2026-11-23T06:00:0{n}Z")
+        assert httpx.post(url, json=body, headers=device_key).status_code == 201
+    assert httpx.get(url).status_code == 401
+    assert httpx.get(url, headers=device_key).status_code == 403
+    assert httpx.get(url, params={"limit": 1001}, headers=ADMIN_HEADERS).status_code == 422
+    first = httpx.get(url, params={"device": SENDER, "limit": 1}, headers=ADMIN_HEADERS).json()
+    second = httpx.get(
+        url, params={"device": SENDER, "limit": 1, "before": first["next"]}, headers=ADMIN_HEADERS
+    ).json()
+    assert first["next"] is not None and len(first["items"]) == len(second["items"]) == 1
+    newer, older = first["items"][0], second["items"][0]
+    assert (newer["device"], older["device"]) == (SENDER, SENDER)
+    assert newer["event_id"] != older["event_id"]
+    assert newer["received_at"] >= older["received_at"] and newer["received_at"].endswith("Z")
