@@ -11,7 +11,7 @@ from datetime import datetime
 
 from sqlalchemy.exc import IntegrityError
 
-from core.database import get_sessionmaker
+from core.database import get_sessionmaker, utcnow
 from core.errors import DepotError
 from core.settings import get_settings
 from service import commands
@@ -64,7 +64,8 @@ def _user_list(_: argparse.Namespace) -> int:
         users = list_users(session)
         print(f"{'name':24s} {'role':11s} {'created (UTC)':17s} {'expires':17s} state")
         for u in users:
-            state = "revoked" if u.revoked_at else "active"
+            expired = u.expires_at is not None and u.expires_at <= utcnow()
+            state = "revoked" if u.revoked_at else "expired" if expired else "active"
             print(
                 f"{u.name:24s} {u.role:11s} {_minute(u.created_at):17s}"
                 f" {_minute(u.expires_at) or 'never':17s} {state}"

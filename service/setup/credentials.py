@@ -41,7 +41,7 @@ def _expiry(days: float | None) -> datetime | None:
     if days is None:
         return None
     if not 0 < days <= 3650:
-        raise Unprocessable("a token's lifetime must be between 0 and 3650 days")
+        raise Unprocessable("a token's lifetime must be more than 0 and at most 3650 days")
     return utcnow() + timedelta(days=days)
 
 
@@ -78,7 +78,8 @@ def rotate_user(
         raise Conflict(f"user {name!r} was revoked; add them again under another name")
     token = new_secret()
     user.token_hash = hash_secret(token)
-    user.expires_at = _expiry(expires_in_days)
+    if expires_in_days is not None:  # else the new token keeps the old one's expiry
+        user.expires_at = _expiry(expires_in_days)
     _record(session, actor, "user_rotated", "user", name)
     session.flush()
     return user, token

@@ -108,3 +108,17 @@ def test_device_key_rotated_and_device_decommissioned(client: TestClient) -> Non
     assert client.post("/api/v1/devices/nope/decommission", headers=ADMIN).status_code == 404
     changes = client.get("/api/v1/credential-changes?subject=A-ac", headers=ADMIN).json()
     assert [c["action"] for c in changes] == ["device_decommissioned", "device_key_rotated"]
+
+
+def test_rotation_keeps_the_expiry_unless_a_new_one_is_given(
+    client: TestClient, session: Session
+) -> None:
+    """Found by the independent trial: rotating turned a 1-day token into a permanent one."""
+    body = {"name": "petro", "role": "engineer", "expires_in_days": 1}
+    added = client.post("/api/v1/users", json=body, headers=ADMIN).json()
+    rotated = client.post("/api/v1/users/petro/rotate", headers=ADMIN).json()
+    assert rotated["expires_at"] == added["expires_at"] is not None
+    longer = client.post(
+        "/api/v1/users/petro/rotate", json={"expires_in_days": 30}, headers=ADMIN
+    ).json()
+    assert longer["expires_at"] > added["expires_at"]
