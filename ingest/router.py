@@ -8,7 +8,6 @@ from typing import Any
 from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import JSONResponse
-from pydantic import ValidationError
 from sqlalchemy.orm import Session
 from starlette.datastructures import UploadFile
 
@@ -18,13 +17,13 @@ from core.errors import (
     PayloadTooLarge,
     Unprocessable,
     UnsupportedMediaType,
-    validation_errors,
 )
 from core.models import Device
 from core.settings import get_settings
 from ingest import service
+from ingest.batches import batch_events
 from ingest.commit_queue import committer_for
-from ingest.schemas import BatchResult, EventAck, EventBatch
+from ingest.schemas import BatchResult, EventAck
 from ingest.snapshots import check_image, store_image
 
 router = APIRouter(tags=["devices"])
@@ -96,17 +95,9 @@ async def post_events(
     payload = _json(body)
     device = principal.device
     assert device is not None
-    if isinstance(payload, dict) and "events" in payload and "kind" not in payload:
-        try:
-            batch = EventBatch.model_validate(payload)
-        except ValidationError as exc:
-            raise Unprocessable(
-                'invalid batch: send {"events": [...]} with 1 to 1000 events',
-                errors=[
-                    {**e, "loc": ["body", *e["loc"]]} for e in validation_errors(list(exc.errors()))
-                ],
-            ) from None
-        results = await run_in_threadpool(service.accept_batch, session, device, batch.events)
+    events = batch_events(payload)
+    if events is not None:
+        results = await run_in_threadpool(service.accept_batch, session, device, events)
         return JSONResponse({"results": results}, status_code=200)
     status, result = await _single(session, device, payload, large=len(body) > INLINE_BYTES)
     return JSONResponse(result, status_code=status)

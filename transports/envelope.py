@@ -15,7 +15,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from pydantic import ValidationError
 from sqlalchemy import select
 from sqlalchemy.exc import DataError, InterfaceError, OperationalError, PendingRollbackError
 from sqlalchemy.orm import Session, sessionmaker
@@ -26,11 +25,10 @@ from core.errors import (
     PayloadTooLarge,
     Unauthorized,
     Unprocessable,
-    validation_errors,
 )
 from core.models import Device
 from ingest import service
-from ingest.schemas import EventBatch
+from ingest.batches import batch_events
 
 log = logging.getLogger("depot.transports")
 
@@ -114,17 +112,9 @@ def accept(
     session: Session, device: Device, payload: Any, transport: str
 ) -> tuple[int, dict[str, Any]]:
     """One payload, single event or batch, through the ingest service as ``POST /events``."""
-    if isinstance(payload, dict) and "events" in payload and "kind" not in payload:
-        try:
-            batch = EventBatch.model_validate(payload)
-        except ValidationError as exc:
-            raise Unprocessable(
-                'invalid batch: send {"events": [...]} with 1 to 1000 events',
-                errors=[
-                    {**e, "loc": ["body", *e["loc"]]} for e in validation_errors(list(exc.errors()))
-                ],
-            ) from None
-        results = service.accept_batch(session, device, batch.events, transport=transport)
+    events = batch_events(payload)
+    if events is not None:
+        results = service.accept_batch(session, device, events, transport=transport)
         return 200, {"results": results}
     return service.accept_event(session, device, payload, transport=transport)
 
