@@ -19,7 +19,7 @@ from pydantic import (
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
 from core.models import DEVICE_KINDS
-from identification.eot import PACKET_BITS, parse_packet
+from identification.eot_packet import PACKET_BITS, parse_packet
 from motion.samples import SAMPLE_LIMITS, sample_problem
 
 EARLIEST = datetime(2000, 1, 1, tzinfo=UTC)
