@@ -358,58 +358,25 @@ def upgrade() -> None:
 
 
 def downgrade() -> None:
-    with op.batch_alter_table("wheel_markings", schema=None) as batch_op:
-        batch_op.drop_index(batch_op.f("ix_wheel_markings_car_id"))
-
-    op.drop_table("wheel_markings")
-    with op.batch_alter_table("snapshots", schema=None) as batch_op:
-        batch_op.drop_index(batch_op.f("ix_snapshots_section"))
-        batch_op.drop_index(batch_op.f("ix_snapshots_run_id"))
-
-    op.drop_table("snapshots")
-    with op.batch_alter_table("raw_events", schema=None) as batch_op:
-        batch_op.drop_index(batch_op.f("ix_raw_events_kind"))
-        batch_op.drop_index("ix_raw_events_device_id_occurred_at")
-
-    op.drop_table("raw_events")
-    with op.batch_alter_table("car_passages", schema=None) as batch_op:
-        batch_op.drop_index(batch_op.f("ix_car_passages_section"))
-        batch_op.drop_index(batch_op.f("ix_car_passages_run_id"))
-
-    op.drop_table("car_passages")
-    with op.batch_alter_table("axle_readings", schema=None) as batch_op:
-        batch_op.drop_index(batch_op.f("ix_axle_readings_section"))
-        batch_op.drop_index(batch_op.f("ix_axle_readings_run_id"))
-
-    op.drop_table("axle_readings")
-    with op.batch_alter_table("runs", schema=None) as batch_op:
-        batch_op.drop_index(batch_op.f("ix_runs_section"))
-
-    op.drop_table("runs")
-    op.drop_table("devices")
-    op.drop_table("sections")
-    with op.batch_alter_table("measurements", schema=None) as batch_op:
-        batch_op.drop_index(batch_op.f("ix_measurements_taken_at"))
-        batch_op.drop_index(batch_op.f("ix_measurements_raw_event_id"))
-        batch_op.drop_index(batch_op.f("ix_measurements_car_id"))
-
-    op.drop_table("measurements")
-    with op.batch_alter_table("maintenance_overrides", schema=None) as batch_op:
-        batch_op.drop_index(batch_op.f("ix_maintenance_overrides_car_id"))
-
-    op.drop_table("maintenance_overrides")
-    with op.batch_alter_table("forecasts", schema=None) as batch_op:
-        batch_op.drop_index(batch_op.f("ix_forecasts_computed_at"))
-        batch_op.drop_index(batch_op.f("ix_forecasts_car_id"))
-
-    op.drop_table("forecasts")
-    op.drop_table("users")
-    op.drop_table("train_positions")
-    op.drop_table("track_markers")
-    op.drop_table("stations")
-    op.drop_table("maintenance_parameters")
-    op.drop_table("cars")
-    with op.batch_alter_table("audit_records", schema=None) as batch_op:
-        batch_op.drop_index(batch_op.f("ix_audit_records_run_id"))
-
-    op.drop_table("audit_records")
+    # Dropping a table drops its indexes too (PostgreSQL and SQLite); children before parents.
+    for table in (
+        "wheel_markings",
+        "snapshots",
+        "raw_events",
+        "car_passages",
+        "axle_readings",
+        "runs",
+        "devices",
+        "sections",
+        "measurements",
+        "maintenance_overrides",
+        "forecasts",
+        "users",
+        "train_positions",
+        "track_markers",
+        "stations",
+        "maintenance_parameters",
+        "cars",
+        "audit_records",
+    ):
+        op.drop_table(table)
