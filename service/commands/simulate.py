@@ -91,7 +91,9 @@ class Simulator:
         length = int(self.rng.integers(5, 11))
         first = int(self.rng.integers(0, len(FLEET) - length))
         now = datetime.now(UTC)
-        trip = Trip(section, origin, destination, str(self.trains), FLEET[first : first + length], now)
+        trip = Trip(
+            section, origin, destination, str(self.trains), FLEET[first : first + length], now
+        )
         outcome = str(self.rng.choice(OUTCOMES, p=list(self.schedule.outcome_weights)))
         self.line.read_cars(origin, trip, trip.cars, now - timedelta(seconds=2 * length + 3))
         cam = f"{origin}-{section}-cam"
@@ -105,7 +107,9 @@ class Simulator:
         trip, lost = going.trip, 1 if going.outcome == "lost_car" else 0
         now = datetime.now(UTC)
         cars = trip.cars[: len(trip.cars) - lost]
-        self.line.read_cars(trip.destination, trip, cars, now - timedelta(seconds=2 * len(cars) + 3))
+        self.line.read_cars(
+            trip.destination, trip, cars, now - timedelta(seconds=2 * len(cars) + 3)
+        )
         if going.outcome != "missing_evidence":
             cam = f"{trip.destination}-{section}-cam"
             self.line.snapshot(cam, now - timedelta(seconds=1), disc=lost == 0, condition="day")
@@ -189,7 +193,7 @@ def demo_device_ids() -> list[str]:
 @contextmanager
 def _client(url: str | None) -> Iterator[httpx.Client]:
     if url is None:
-        from service.app import create_app  # noqa: PLC0415 - only in-process needs the app
+        from service.app import create_app
 
         with TestClient(create_app()) as client:
             yield client
@@ -246,7 +250,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     p = subparsers.add_parser(
         "simulate", help="keep the demo line alive: heartbeats and a train every few minutes"
     )
-    p.add_argument("--url", help="a running server, e.g. http://127.0.0.1:8000 (default: in-process)")
+    p.add_argument(
+        "--url", help="a running server, e.g. http://127.0.0.1:8000 (default: in-process)"
+    )
     p.add_argument("--train-every", type=float, default=Schedule.train_every_s, metavar="S")
     p.add_argument("--transit", type=float, default=Schedule.transit_s, metavar="S")
     p.add_argument("--heartbeat-every", type=float, default=Schedule.heartbeat_every_s, metavar="S")

@@ -23,11 +23,11 @@ from service.clearance.router import (
     get_snapshot_image,
     get_snapshot_overlay,
 )
+from service.clearance.service import ACTION_STATES
 from service.reasons import meaningful
 from service.review import sessions
 from service.review.service import (
     ACTION_LABELS,
-    ACTION_STATES,
     DECIDERS,
     DONE_WORDS,
     STATE_WORDS,
@@ -168,7 +168,9 @@ def _refusal(session: DbSession, run_id: int, action: str) -> str | None:
     """Why the screen refuses an action before recording anything, or None."""
     screen = build_screen(session, run_id=run_id, now=utcnow())
     done = last_decision(screen.run)
-    held = next((s for s in screen.sections if screen.run and s["id"] == screen.run["section"]), None)
+    held = next(
+        (s for s in screen.sections if screen.run and s["id"] == screen.run["section"]), None
+    )
     if done and done["action"] == action and held and held["state"] == ACTION_STATES[action]:
         return (
             f"Run {run_id} is already {done['words']} (by {done['actor']} at"

@@ -96,11 +96,7 @@ def sensible_actions(section: dict[str, Any] | None, run: dict[str, Any] | None)
     order = ["keep_blocked", "clear"] if section["state"] == "alarm" else ["clear", "keep_blocked"]
     order.append("sweep")
     state = section["state"]
-    return [
-        a
-        for a in order
-        if ACTION_STATES[a] != state and (a != "sweep" or state in SWEEP_FROM)
-    ]
+    return [a for a in order if ACTION_STATES[a] != state and (a != "sweep" or state in SWEEP_FROM)]
 
 
 def last_decision(run: dict[str, Any] | None) -> dict[str, Any] | None:
@@ -112,11 +108,12 @@ def last_decision(run: dict[str, Any] | None) -> dict[str, Any] | None:
 
 
 def _since(section: dict[str, Any], now: datetime) -> str:
+    state: str = section["state"]
+    words = SINCE_WORDS.get(state, state)
     since = section["state_since"]
     if not since:
-        return SINCE_WORDS.get(section["state"], section["state"])
-    seconds = (now - datetime.fromisoformat(since)).total_seconds()
-    return f"{SINCE_WORDS.get(section['state'], section['state'])} for {duration(seconds)}"
+        return words
+    return f"{words} for {duration((now - datetime.fromisoformat(since)).total_seconds())}"
 
 
 def _title(queue: list[dict[str, Any]]) -> str:

@@ -84,9 +84,9 @@ def test_decision_message_comes_from_the_session_once(
         follow_redirects=False,
     )
     assert response.status_code == 303
-    assert "notice" not in response.headers["location"] and "kept" not in response.headers[
-        "location"
-    ]
+    assert (
+        "notice" not in response.headers["location"] and "kept" not in response.headers["location"]
+    )
     page = client.get(response.headers["location"]).text
     assert re.search(r'class="flash flash-ok"[^>]*>[^<]*kept blocked', page), page[:2000]
     assert 'class="flash' not in client.get(response.headers["location"]).text, "shown once"

@@ -36,10 +36,7 @@ def _silent(url: str) -> list[str]:
         d["id"]
         for d in devices
         if d["kind"] not in ("marking_station", "test_bench", "onboard_unit")
-        and (
-            d["last_seen_at"] is None
-            or now - datetime.fromisoformat(d["last_seen_at"]) > limit
-        )
+        and (d["last_seen_at"] is None or now - datetime.fromisoformat(d["last_seen_at"]) > limit)
     ]
 
 
