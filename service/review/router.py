@@ -185,7 +185,7 @@ def _decide(
     if who.role not in DECIDERS:
         return "Only a dispatcher may clear or block a section.", "error"
     if action not in DONE_WORDS or (kept := meaningful(reason)) is None:
-        return "Give a reason of at least 3 characters; nothing was recorded.", "error"
+        return "Give a reason of at least 3 characters. Nothing was recorded.", "error"
     refused = _refusal(session, run_id, action)
     if refused:
         return refused, "error"
@@ -193,6 +193,8 @@ def _decide(
         clearance.act(session, run_id, action, kept, who, utcnow())
     except DepotError as exc:
         return f"Refused: {exc.detail}; nothing was recorded.", "error"
+    if action == "sweep":
+        return f"Run {run_id}: the section waits for a sweep train (asked by {who.name}).", "ok"
     return f"Run {run_id}: {DONE_WORDS[action]} by {who.name}.", "ok"
 
 
