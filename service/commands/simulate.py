@@ -73,6 +73,7 @@ class Simulator:
     running: dict[str, Running] = field(default_factory=dict)
     trains: int = 4000
     directions: dict[str, int] = field(default_factory=dict)
+    waiting: str = ""  # the held sections last reported, so that it is said once
 
     def heartbeats(self) -> None:
         self.line.heartbeats(datetime.now(UTC))
@@ -80,7 +81,13 @@ class Simulator:
     def free_sections(self) -> list[str]:
         got = self.line.client.get("/api/v1/sections", headers=self.line.admin)
         got.raise_for_status()
-        return [s["id"] for s in got.json() if s["state"] == "free" and s["id"] not in self.running]
+        states = {s["id"]: s["state"] for s in got.json()}
+        free = [i for i, state in states.items() if state == "free" and i not in self.running]
+        held = ", ".join(f"{i} {state}" for i, state in states.items() if state != "free")
+        if not free and held != self.waiting:
+            _say(f"no free section ({held}): the next train waits for the dispatcher")
+        self.waiting = "" if free else held
+        return free
 
     def depart(self, section: str) -> None:
         _, a, b, _ = next(s for s in SECTIONS if s[0] == section)
@@ -190,6 +197,18 @@ def demo_device_ids() -> list[str]:
     return [*ids, "D-mark", "D-bench"]
 
 
+def _when_answering(line: DemoLine, wait_s: float) -> str:
+    """Take over the line once the server answers (``make run`` starts both at once)."""
+    deadline = time.monotonic() + wait_s
+    while True:
+        try:
+            return take_over(line)
+        except httpx.TransportError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.5)
+
+
 @contextmanager
 def _client(url: str | None) -> Iterator[httpx.Client]:
     if url is None:
@@ -227,7 +246,10 @@ def _run(args: argparse.Namespace, schedule: Schedule, stop: threading.Event) ->
         with _client(args.url) as client:
             line = DemoLine(cast(TestClient, client))
             line.serial = int(time.time() * 1000)  # event ids never reuse the demo day's
-            _say(take_over(line))
+            try:
+                _say(_when_answering(line, args.wait))
+            except httpx.TransportError:
+                return fail(f"no server answers at {args.url}; start it (depot serve) first")
             sim = Simulator(line, schedule, np.random.default_rng(args.seed), stop)
             until = None if args.duration is None else time.monotonic() + args.duration
             try:
@@ -257,5 +279,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     p.add_argument("--transit", type=float, default=Schedule.transit_s, metavar="S")
     p.add_argument("--heartbeat-every", type=float, default=Schedule.heartbeat_every_s, metavar="S")
     p.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds")
+    p.add_argument(
+        "--wait", type=float, default=30.0, metavar="S", help="wait S seconds for the server"
+    )
     p.add_argument("--seed", type=int, default=None, help="outcomes repeatable with a seed")
     p.set_defaults(func=_simulate)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -123,3 +124,11 @@ def test_simulate_refuses_another_line_and_bad_periods(
         assert httpx.post(f"{url}/api/v1/devices", json=body, headers=ADMIN).status_code == 201
         assert main(["simulate", "--url", url, *FAST, "--duration", "2"]) == 2
     assert "drives only the demo line" in capsys.readouterr().err
+
+
+def test_simulate_without_a_server_says_so(capsys: pytest.CaptureFixture[str]) -> None:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]  # nothing listens there once closed
+    assert main(["simulate", "--url", f"http://127.0.0.1:{port}", "--wait", "1"]) == 2
+    assert "no server answers" in capsys.readouterr().err
