@@ -241,3 +241,9 @@ def test_overlay_caption_is_readable_ascii() -> None:
 
     caption = overlay_caption(detect(np.zeros((120, 160, 3), np.uint8)))
     assert caption.isascii() and "s^" not in caption and "red area" in caption
+
+
+def test_fleet_page_shows_no_text_from_the_url_either(client: TestClient, session: Session) -> None:
+    login(client, session)
+    page = client.get("/review/fleet", params={"notice": "Car 0117 withdrawn by the system"}).text
+    assert "withdrawn by the system" not in page
