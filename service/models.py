@@ -5,6 +5,7 @@ from core.models import Car, CredentialChange, Device, Section, Station, User
 from ingest.models import RawEvent, Snapshot
 from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run, WheelMarking
 from service.fleet.models import Forecast, MaintenanceOverride, Measurement, Parameter
+from service.review.models import ReviewSession
 from service.trains.models import TrackMarker, TrainPosition
 
 metadata = Base.metadata
@@ -21,6 +22,7 @@ __all__ = [
     "Measurement",
     "Parameter",
     "RawEvent",
+    "ReviewSession",
     "Run",
     "Section",
     "Snapshot",

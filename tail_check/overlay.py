@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 from .detect import DetectionResult, check_image, region_box
 from .profile import CameraProfile
 
-__all__ = ["overlay_png", "render_overlay"]
+__all__ = ["overlay_caption", "overlay_png", "render_overlay"]
 
 # BGR colours: green = present, amber = uncertain, red = absent.
 _VERDICT_COLOUR = {"present": (60, 200, 60), "uncertain": (0, 190, 255), "absent": (40, 40, 230)}
@@ -76,10 +76,7 @@ def render_overlay(
     if result.bbox is not None:
         x, y, w, h = result.bbox
         cv2.rectangle(out, (x, y), (x + w, y + h), colour, 2 * thick)
-    text = (
-        f"tail disc {result.verdict.upper()}  score {result.score:.2f}  "
-        f"s^ {result.pixel_fraction:.4f}"
-    )
+    text = overlay_caption(result)
     font_scale = max(0.4, out.shape[1] / 1400)
     (tw, th), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, font_scale, thick)
     cv2.rectangle(out, (0, 0), (min(out.shape[1], tw + 12), th + base + 10), (20, 20, 20), -1)
@@ -87,6 +84,14 @@ def render_overlay(
         out, text, (6, th + 5), cv2.FONT_HERSHEY_SIMPLEX, font_scale, colour, thick, cv2.LINE_AA
     )
     return out
+
+
+def overlay_caption(result: DetectionResult) -> str:
+    """The overlay's one line, in plain ASCII (OpenCV's fonts draw no accents: no ``ŝ``)."""
+    return (
+        f"tail disc {result.verdict.upper()}  score {result.score:.2f} (1.00 = certain)  "
+        f"red area {result.pixel_fraction:.2%}"
+    )
 
 
 def overlay_png(

@@ -12,7 +12,8 @@ from core.errors import DepotError
 from service.fleet import service, views
 from service.fleet.chart import cached_chart
 from service.reasons import meaningful
-from service.review.router import _who, templates
+from service.review import sessions
+from service.review.router import COOKIE, _who, templates
 
 router = APIRouter(tags=["review screen"], include_in_schema=False)
 DECIDERS = ("engineer", "admin")
@@ -42,7 +43,6 @@ def _matching(cars: list[dict[str, Any]], car: str, advice: str) -> list[dict[st
 def fleet_page(
     request: Request,
     session: DbSession,
-    notice: str | None = None,
     car: Annotated[str, Query(max_length=32)] = "",
     advice: Annotated[str, Query(max_length=32)] = "",
     page: Annotated[int, Query(ge=1, le=100_000)] = 1,
@@ -62,7 +62,7 @@ def fleet_page(
         "filter": {"car": car, "advice": advice},
         "page": page,
         "pages": pages,
-        "notice": notice,
+        "flash": sessions.take_flash(session, request.cookies.get(COOKIE)),
         "may_decide": who.role in DECIDERS,
         "advice_words": ADVICE_WORDS,
     }
@@ -101,5 +101,5 @@ def fleet_decide(
             notice = f"Car {car_id}: {ACTION_WORDS[action]}."
         except DepotError as exc:
             notice = exc.detail
-    url = request.url_for("fleet_page").include_query_params(notice=notice)
-    return RedirectResponse(f"{url}#car-{car_id}", status_code=303)
+    sessions.flash(session, request.cookies.get(COOKIE), notice)
+    return RedirectResponse(f"{request.url_for('fleet_page')}#car-{car_id}", status_code=303)

@@ -1,4 +1,5 @@
-"""The review screen (``/review``): server-rendered, refreshes itself, dispatcher login by token."""
+"""The review screen (``/review``): server-rendered, updated in place by ``/review/live``,
+dispatcher login by token into a server-side session."""
 
 from __future__ import annotations
 
@@ -6,8 +7,9 @@ from pathlib import Path
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Form, Query, Request
-from fastapi.responses import HTMLResponse, RedirectResponse, Response
+from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, RedirectResponse, Response
 from fastapi.templating import Jinja2Templates
+from pydantic import BaseModel
 
 from core.auth import Principal, person_for_token
 from core.database import DbSession, utcnow
@@ -21,29 +23,46 @@ from service.clearance.router import (
     get_snapshot_image,
     get_snapshot_overlay,
 )
+from service.clearance.service import ACTION_STATES
 from service.reasons import meaningful
-from service.review.service import STATE_WORDS, aligned_rows, build_screen
+from service.review import sessions
+from service.review.service import (
+    ACTION_LABELS,
+    DECIDERS,
+    DONE_WORDS,
+    STATE_WORDS,
+    Screen,
+    aligned_rows,
+    build_screen,
+    last_decision,
+)
+from service.review.timefmt import clock, when, zone_name
 
 COOKIE = "depot_review"
-templates = Jinja2Templates(directory=str(Path(__file__).parent / "templates"))
-templates.env.globals["state_words"] = STATE_WORDS
+HERE = Path(__file__).parent
+STATIC = {"review.js": "text/javascript", "alert.wav": "audio/wav"}
+FRAGMENTS = ("sections", "queue", "stale", "recent", "run", "actions")
+templates = Jinja2Templates(directory=str(HERE / "templates"))
+templates.env.globals.update(state_words=STATE_WORDS, action_labels=ACTION_LABELS)
+templates.env.filters.update(when=when, clock=clock)
 router = APIRouter(tags=["review screen"], include_in_schema=False)
 
 
 def _who(request: Request, session: DbSession) -> Principal | None:
-    token = request.cookies.get(COOKIE)
-    return person_for_token(session, token) if token else None
+    """The person logged in on this browser (shared with the fleet page), or None."""
+    return sessions.person(session, request.cookies.get(COOKIE), utcnow())
 
 
 @router.get("/review/login", response_class=HTMLResponse)
-def login_form(request: Request, error: str | None = None) -> Response:
-    return templates.TemplateResponse(request, "login.html", {"error": error})
+def login_form(request: Request) -> Response:
+    return templates.TemplateResponse(request, "login.html", {"error": None})
 
 
 @router.post("/review/login")
 def login(request: Request, session: DbSession, token: Annotated[str, Form()]) -> Response:
     person = person_for_token(session, token.strip())
-    if person is None:
+    cookie = sessions.start(session, token.strip(), person, utcnow()) if person else None
+    if cookie is None:
         return templates.TemplateResponse(
             request,
             "login.html",
@@ -53,20 +72,35 @@ def login(request: Request, session: DbSession, token: Annotated[str, Form()]) -
     response = RedirectResponse("/review", status_code=303)
     response.set_cookie(
         COOKIE,
-        token.strip(),
+        cookie,
         httponly=True,
         samesite="strict",
         secure=get_settings().environment == "production",
-        max_age=12 * 3600,
+        max_age=sessions.SESSION_HOURS * 3600,
     )
     return response
 
 
 @router.post("/review/logout")
-def logout() -> Response:
+def logout(request: Request, session: DbSession) -> Response:
+    sessions.end(session, request.cookies.get(COOKIE))
     response = RedirectResponse("/review/login", status_code=303)
     response.delete_cookie(COOKIE)
     return response
+
+
+def _context(screen: Screen, who: Principal) -> dict[str, Any]:
+    now = utcnow()
+    return {
+        "who": who,
+        "screen": screen,
+        "may_decide": who.role in DECIDERS,
+        "consists": aligned_rows(screen.run) if screen.run else [],
+        "refresh_s": get_settings().review_refresh_s,
+        "heartbeat_s": get_settings().heartbeat_s,
+        "updated": clock(now),
+        "zone": zone_name(now),
+    }
 
 
 @router.get("/review", response_class=HTMLResponse)
@@ -74,28 +108,94 @@ def review(
     request: Request,
     session: DbSession,
     run: Annotated[int | None, Query(ge=1, le=MAX_ROW_ID)] = None,
-    notice: str | None = None,
 ) -> Response:
     who = _who(request, session)
     if who is None:
         return RedirectResponse("/review/login", status_code=303)
-    screen = build_screen(session, run_id=run, now=utcnow())
-    context: dict[str, Any] = {
-        "who": who,
-        "screen": screen,
-        "notice": notice,
-        "consists": aligned_rows(screen.run) if screen.run else [],
-        "refresh_s": get_settings().review_refresh_s,
-        "heartbeat_s": get_settings().heartbeat_s,
-    }
+    screen = build_screen(session, run_id=run, now=utcnow(), role=who.role)
+    context = _context(screen, who)
+    context["flash"] = sessions.take_flash(session, request.cookies.get(COOKIE))
     return templates.TemplateResponse(request, "review.html", context)
 
 
-DONE_WORDS = {
-    "clear": "cleared",
-    "keep_blocked": "kept blocked",
-    "sweep": "the section waits for a sweep train",
-}
+class LiveScreen(BaseModel):
+    """One update of the page: its fragments' HTML, the alerts, the title, when it was built."""
+
+    updated: str  # HH:MM:SS in the dispatcher's zone
+    zone: str
+    run: int | None
+    title: str
+    alerts: list[dict[str, Any]]
+    fragments: dict[str, str]
+
+
+@router.get("/review/live", response_model=LiveScreen)
+def live(
+    request: Request,
+    session: DbSession,
+    run: Annotated[int | None, Query(ge=1, le=MAX_ROW_ID)] = None,
+) -> Any:
+    """The page's parts, re-rendered; the page swaps them in without touching a typed reason."""
+    who = _who(request, session)
+    if who is None:
+        return JSONResponse({"detail": "logged out"}, status_code=401)
+    screen = build_screen(session, run_id=run, now=utcnow(), role=who.role)
+    context = _context(screen, who)
+    module = templates.env.get_template("fragments.html").make_module(context)
+    return LiveScreen(
+        updated=context["updated"],
+        zone=context["zone"],
+        run=screen.run["id"] if screen.run else None,
+        title=screen.title,
+        alerts=screen.alerts,
+        fragments={name: str(getattr(module, name)()) for name in FRAGMENTS},
+    )
+
+
+@router.get("/review/static/{name}")
+def static(name: str) -> Response:
+    """The page's script and alert sound, shipped with the app (no build step)."""
+    if name not in STATIC:
+        return Response(status_code=404)
+    return FileResponse(
+        HERE / "static" / name,
+        media_type=STATIC[name],
+        headers={"Cache-Control": "no-cache"},
+    )
+
+
+def _refusal(session: DbSession, run_id: int, action: str) -> str | None:
+    """Why the screen refuses an action before recording anything, or None."""
+    screen = build_screen(session, run_id=run_id, now=utcnow())
+    done = last_decision(screen.run)
+    held = next(
+        (s for s in screen.sections if screen.run and s["id"] == screen.run["section"]), None
+    )
+    if done and done["action"] == action and held and held["state"] == ACTION_STATES[action]:
+        return (
+            f"Run {run_id} is already {done['words']} (by {done['actor']} at"
+            f" {when(done['recorded_at'])}); nothing was recorded."
+        )
+    return None
+
+
+def _decide(
+    session: DbSession, who: Principal, run_id: int, action: str, reason: str
+) -> tuple[str, str]:
+    if who.role not in DECIDERS:
+        return "Only a dispatcher may clear or block a section.", "error"
+    if action not in DONE_WORDS or (kept := meaningful(reason)) is None:
+        return "Give a reason of at least 3 characters. Nothing was recorded.", "error"
+    refused = _refusal(session, run_id, action)
+    if refused:
+        return refused, "error"
+    try:
+        clearance.act(session, run_id, action, kept, who, utcnow())
+    except DepotError as exc:
+        return f"Refused: {exc.detail}; nothing was recorded.", "error"
+    if action == "sweep":
+        return f"Run {run_id}: the section waits for a sweep train (asked by {who.name}).", "ok"
+    return f"Run {run_id}: {DONE_WORDS[action]} by {who.name}.", "ok"
 
 
 @router.post("/review/runs/{run_id}/decision")
@@ -106,22 +206,13 @@ def decide(
     action: Annotated[str, Form()],
     reason: Annotated[str, Form()] = "",
 ) -> Response:
+    cookie = request.cookies.get(COOKIE)
     who = _who(request, session)
     if who is None:
         return RedirectResponse("/review/login", status_code=303)
-    if who.role not in ("dispatcher", "admin"):
-        notice = "Only a dispatcher may clear or block a section."
-    elif action not in DONE_WORDS or (kept := meaningful(reason)) is None:
-        notice = "Give a reason of at least 3 characters."
-    else:
-        try:
-            clearance.act(session, run_id, action, kept, who, utcnow())
-            notice = f"Run {run_id}: {DONE_WORDS[action]}."
-        except DepotError as exc:
-            notice = exc.detail
-    return RedirectResponse(
-        request.url_for("review").include_query_params(run=run_id, notice=notice), status_code=303
-    )
+    message, kind = _decide(session, who, run_id, action, reason)
+    sessions.flash(session, cookie, message, kind)
+    return RedirectResponse(request.url_for("review").include_query_params(run=run_id), 303)
 
 
 @router.get("/review/snapshots/{snapshot_id}/{which}")

@@ -1,4 +1,5 @@
-"""What the review screen shows: sections, the queue, stale devices, one run in detail."""
+"""What the review screen shows: sections, the queue, stale devices, one run in detail, the
+actions that still make sense on it, and the alerts the page sounds."""
 
 from __future__ import annotations
 
@@ -12,7 +13,10 @@ from sqlalchemy.orm import Session
 from core.models import Device, Section
 from core.settings import get_settings
 from service.clearance.models import Run
+from service.clearance.rules import SWEEP_FROM
+from service.clearance.service import ACTION_STATES
 from service.clearance.views import QUEUE_STATES, run_out, section_out
+from service.review.timefmt import duration
 
 STATE_WORDS = {
     "free": "free",
@@ -23,6 +27,28 @@ STATE_WORDS = {
     "blocked": "blocked",
     "awaiting_sweep": "awaiting sweep",
 }
+# "in alarm for 12 min": how each queue state reads with its duration.
+SINCE_WORDS = {
+    "alarm": "in alarm",
+    "review": "needs review",
+    "awaiting_confirmation": "awaiting confirmation",
+    "blocked": "blocked",
+}
+DONE_WORDS = {"clear": "cleared", "keep_blocked": "kept blocked", "sweep": "held for a sweep train"}
+ACTION_LABELS = {
+    "clear": "Clear the section",
+    "keep_blocked": "Keep blocked",
+    "sweep": "Clear after a sweep train",
+}
+ALERT_STATES = ("alarm", "review")  # states that sound and notify when they appear
+CONSIST_WORDS = {
+    "identical": "same cars, same order",
+    "missing": "cars missing",
+    "unknown": "cannot tell (cars not all identified)",
+}
+DECIDERS = ("dispatcher", "admin")
+# Clearing from these states overrides evidence of a loss: the page asks once more.
+CONFIRM_CLEAR = {"alarm": "in ALARM", "awaiting_sweep": "waiting for its sweep train"}
 
 
 @dataclass(frozen=True)
@@ -32,6 +58,11 @@ class Screen:
     stale: list[dict[str, Any]]
     recent: list[dict[str, Any]]
     run: dict[str, Any] | None
+    actions: list[str]
+    confirm: dict[str, str]  # action → the question asked before it is sent
+    decided: dict[str, Any] | None
+    alerts: list[dict[str, Any]]
+    title: str
 
 
 def stale_devices(session: Session, now: datetime) -> list[dict[str, Any]]:
@@ -52,23 +83,92 @@ def stale_devices(session: Session, now: datetime) -> list[dict[str, Any]]:
     return out
 
 
-def build_screen(session: Session, *, run_id: int | None, now: datetime) -> Screen:
+def sensible_actions(section: dict[str, Any] | None, run: dict[str, Any] | None) -> list[str]:
+    """The actions that would change something, safest first on an alarm.
+
+    Only on the section's current, arrived run; never the action whose state the section is
+    already in; nothing on a free section; a sweep only where nothing proves the section empty.
+    """
+    if section is None or run is None or run["status"] != "arrived":
+        return []
+    if section["last_run_id"] != run["id"] or section["state"] in ("free", "occupied"):
+        return []
+    order = ["keep_blocked", "clear"] if section["state"] == "alarm" else ["clear", "keep_blocked"]
+    order.append("sweep")
+    state = section["state"]
+    return [a for a in order if ACTION_STATES[a] != state and (a != "sweep" or state in SWEEP_FROM)]
+
+
+def last_decision(run: dict[str, Any] | None) -> dict[str, Any] | None:
+    """Which action was taken on the run, by whom and when (the latest audit record)."""
+    if not run or not run["overrides"]:
+        return None
+    record = run["overrides"][-1]
+    return {**record, "words": DONE_WORDS.get(record["action"], record["action"])}
+
+
+def _since(section: dict[str, Any], now: datetime) -> str:
+    state: str = section["state"]
+    words = SINCE_WORDS.get(state, state)
+    since = section["state_since"]
+    if not since:
+        return words
+    return f"{words} for {duration((now - datetime.fromisoformat(since)).total_seconds())}"
+
+
+def _title(queue: list[dict[str, Any]]) -> str:
+    alarms = [s["id"] for s in queue if s["state"] == "alarm"]
+    if alarms:
+        return f"ALARM {', '.join(alarms)} · depot — review ({len(queue)})"
+    return f"depot — review ({len(queue)})" if queue else "depot — review"
+
+
+def build_screen(
+    session: Session, *, run_id: int | None, now: datetime, role: str = "dispatcher"
+) -> Screen:
     sections = [
         section_out(session, s) for s in session.scalars(select(Section).order_by(Section.id))
     ]
     queue = [s for s in sections if s["state"] in QUEUE_STATES and s["run"] is not None]
     queue.sort(key=lambda s: s["state_since"] or "")
+    for s in queue:
+        s["since_words"] = _since(s, now)
     recent_runs = session.scalars(select(Run).order_by(Run.id.desc()).limit(15)).all()
     recent = [run_out(session, r) for r in recent_runs]
     if run_id is None and queue:
         run_id = queue[0]["run"]["id"]
     found = session.get(Run, run_id) if run_id is not None else None
+    run = run_out(session, found) if found else None
+    held = next((s for s in sections if run and s["id"] == run["section"]), None)
+    actions = sensible_actions(held, run) if role in DECIDERS else []
+    confirm = {}
+    if held and held["state"] in CONFIRM_CLEAR:
+        confirm["clear"] = (
+            f"Clear section {held['id']} although it is {CONFIRM_CLEAR[held['state']]}?"
+            " Only when you know the section is empty."
+        )
+    alerts = [
+        {
+            "section": s["id"],
+            "state": s["state"],
+            "run": s["run"]["id"],
+            "train": s["run"]["train"],
+            "since": s["state_since"],
+        }
+        for s in queue
+        if s["state"] in ALERT_STATES
+    ]
     return Screen(
         sections,
         queue,
         stale_devices(session, now),
         recent,
-        run_out(session, found) if found else None,
+        run,
+        actions,
+        confirm,
+        last_decision(run),
+        alerts,
+        _title(queue),
     )
 
 
@@ -81,6 +181,7 @@ def aligned_rows(run: dict[str, Any]) -> list[dict[str, Any]]:
             {
                 "family": {"wheel": "wheel marks", "ir": "infrared"}.get(family, family),
                 "status": comparison["status"],
+                "status_words": CONSIST_WORDS.get(comparison["status"], comparison["status"]),
                 "rows": rows,
             }
         )

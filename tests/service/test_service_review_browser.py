@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import httpx
@@ -11,7 +12,10 @@ from core.database import get_sessionmaker
 from core.settings import get_settings
 from service.demo import load_demo
 from service.setup.service import create_user
+from tests.service.linekit import build_line
 from tests.service.livekit import live_server
+from tests.service.reviewkit import late_photo_without_disc, review_run
+from tests.service.scenario import Line
 
 CHROMIUM = Path("/usr/bin/chromium")
 SCREENSHOT = Path(__file__).resolve().parents[2] / "docs" / "review.png"
@@ -69,18 +73,15 @@ def test_dispatcher_blocks_the_alarm_and_clears_another(tmp_path: Path) -> None:
             SCREENSHOT.parent.mkdir(exist_ok=True)
             page.screenshot(path=str(SCREENSHOT))
 
-            keep = run.locator("form:has(input[value=keep_blocked])")
-            keep.locator("textarea").fill(
-                "two cars missing; section closed until the line is walked"
-            )
-            keep.locator("button").click()
-            expect(page.locator(".notice")).to_contain_text("kept blocked")
+            page.fill("#reason", "two cars missing; section closed until the line is walked")
+            page.click("#decide button[value=keep_blocked]")
+            expect(page.locator(".flash-ok")).to_contain_text("kept blocked by olena")
+            expect(page.locator("#decided")).to_contain_text("kept blocked by olena")
 
             page.click("#queue a:has-text('Section BC')")
-            clear = page.locator("#run form:has(input[value=clear])")
-            clear.locator("textarea").fill("night image checked by eye: the disc is there")
-            clear.locator("button").click()
-            expect(page.locator(".notice")).to_contain_text("cleared")
+            page.fill("#reason", "night image checked by eye: the disc is there")
+            page.click("#decide button[value=clear]")
+            expect(page.locator(".flash-ok")).to_contain_text("cleared by olena")
             browser.close()
 
         states = {
@@ -92,3 +93,69 @@ def test_dispatcher_blocks_the_alarm_and_clears_another(tmp_path: Path) -> None:
             ("BC", "clear", "olena"),
             ("AB", "keep_blocked", "olena"),
         ]
+
+
+PERIOD_S = 2  # DEPOT_REVIEW_REFRESH_S in the live test: its smallest allowed value
+SLACK_MS = 1500  # one request's time on a loaded 2-core machine
+
+
+def test_screen_updates_in_place_keeps_the_draft_alerts_and_turns_stale(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Issue 17: an alarm arriving while a reason is typed shows within one period with the
+    draft kept, sounds and notifies; Clear asks first on an alarm; a stopped server is shown."""
+    from playwright.sync_api import expect, sync_playwright
+
+    monkeypatch.setenv("DEPOT_REVIEW_REFRESH_S", str(PERIOD_S))
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(
+            executable_path=str(CHROMIUM),
+            args=[*CHROMIUM_ARGS, "--autoplay-policy=no-user-gesture-required"],
+        )
+        context = browser.new_context(viewport={"width": 1366, "height": 768})
+        page = context.new_page()
+        with live_server(tmp_path) as url, httpx.Client(base_url=url) as http:
+            context.grant_permissions(["notifications"], origin=url)
+            line = Line(http, build_line(http))  # type: ignore[arg-type]
+            run = review_run(line)
+            with get_sessionmaker().begin() as session:
+                token = create_user(session, "olena", "dispatcher")
+            page.goto(f"{url}/review")
+            page.fill("#token", token)
+            page.get_by_role("button", name="Log in").click()
+            section = page.locator("#sections tr[data-section=AB]")
+            expect(section).to_have_attribute("data-state", "review")
+            expect(page.locator("#updated")).to_have_text(re.compile(r"updated \d\d:\d\d:\d\d"))
+            page.click("#sound")
+            expect(page.locator("#sound")).to_have_attribute("aria-pressed", "true")
+            # the click plays the chime once: the test of the sound, and the unlock
+            expect(page.locator("body")).to_have_attribute("data-sounded", "1")
+
+            page.fill("#reason", "checking with B")
+            page.click("h1")  # the box is left with the draft in it, as in the issue
+            late_photo_without_disc(line)
+            within = PERIOD_S * 1000 + SLACK_MS
+            expect(section).to_have_attribute("data-state", "alarm", timeout=within)
+            expect(page.locator("#reason")).to_have_value("checking with B")
+            expect(page).to_have_title(re.compile(r"^ALARM AB"))
+            alarm_row = page.locator(f"#queue tr.item-alarm[data-run='{run}']")
+            expect(alarm_row.locator(".since")).to_contain_text("in alarm for")
+            expect(page.locator("body")).to_have_attribute("data-alerts", "1")
+            expect(page.locator("body")).to_have_attribute("data-notified", "1")
+            expect(page.locator("body")).to_have_attribute("data-sounded", "2")
+
+            buttons = page.locator("#decide button[name=action]")
+            expect(buttons.first).to_have_attribute("value", "keep_blocked")
+            page.once("dialog", lambda dialog: dialog.dismiss())
+            page.click("#decide button[value=clear]")
+            expect(page.locator("#reason")).to_have_value("checking with B")  # not sent
+            assert line.section()["state"] == "alarm"
+            page.fill("#reason", "B confirms the last car is missing")
+            page.click("#decide button[value=keep_blocked]")
+            expect(page.locator(".flash-ok")).to_contain_text("kept blocked by olena")
+            expect(page.locator("#decide button[value=keep_blocked]")).to_have_count(0)
+            expect(page.locator("body")).not_to_have_class(re.compile("stale"))
+        # the server is stopped: within twice the period the page must say it is stale
+        expect(page.locator("#stale-banner")).to_be_visible(timeout=2 * within + 1000)
+        expect(page.locator("body")).to_have_class(re.compile("stale"))
+        browser.close()

@@ -1,0 +1,141 @@
+// The review screen updates itself in place (plain JavaScript, no build step).
+// Every period it fetches /review/live and swaps in the sections, queue, silent devices,
+// recent runs, the run's evidence and the action buttons. The reason box is never part of
+// what is swapped, so a typed reason is kept. If no update arrives within twice the period,
+// the page says so (banner, greyed states): a screen that cannot update must not look current.
+// A new alarm or review sounds (once "Enable sound" was clicked: browsers require a click),
+// raises a browser notification when permitted, and flashes the header.
+(function () {
+  "use strict";
+  var screen = document.getElementById("screen");
+  if (!screen) { return; }
+  var period = Number(screen.dataset.refreshS) * 1000;
+  var lastOk = Date.now();
+  var body = document.body;
+  var banner = document.getElementById("stale-banner");
+  var updated = document.getElementById("updated");
+  var staleSince = document.getElementById("stale-since");
+  var soundButton = document.getElementById("sound");
+  var audio = document.getElementById("alert-sound");
+  var seen = {};
+  JSON.parse(document.getElementById("initial-alerts").textContent).forEach(function (a) {
+    seen[a.run + ":" + a.state] = true;
+  });
+  body.dataset.alerts = "0";
+  body.dataset.sounded = "0";
+  body.dataset.notified = "0";
+
+  function count(name) { body.dataset[name] = String(Number(body.dataset[name]) + 1); }
+
+  function soundOn() { return window.localStorage.getItem("depot-sound") === "on"; }
+
+  function showSound() {
+    soundButton.setAttribute("aria-pressed", soundOn() ? "true" : "false");
+    soundButton.textContent = soundOn() ? "Sound on" : "Enable sound";
+  }
+
+  function play() {
+    audio.currentTime = 0;
+    var played = audio.play();
+    if (played && played.then) {
+      played.then(function () {
+        count("sounded");
+        soundButton.classList.remove("blocked");
+      }, function () {
+        // The browser refused (no click on this page yet): say so on the control.
+        soundButton.classList.add("blocked");
+        soundButton.textContent = "Sound blocked: click";
+      });
+    }
+  }
+
+  soundButton.addEventListener("click", function () {
+    window.localStorage.setItem("depot-sound", soundOn() ? "off" : "on");
+    showSound();
+    if (soundOn()) {
+      play(); // also the test of the sound, and the click that unlocks it
+      if ("Notification" in window && Notification.permission === "default") {
+        Notification.requestPermission();
+      }
+    }
+  });
+  showSound();
+
+  function ring(fresh) {
+    count("alerts");
+    body.classList.remove("ringing");
+    void body.offsetWidth; // restart the animation
+    body.classList.add("ringing");
+    if (soundOn()) { play(); }
+    if ("Notification" in window && Notification.permission === "granted") {
+      fresh.forEach(function (a) {
+        var what = a.state === "alarm" ? "ALARM" : "needs review";
+        new Notification("Section " + a.section + ": " + what, {
+          body: "train " + a.train + " (run " + a.run + ")",
+          tag: "depot-" + a.run + "-" + a.state,
+        });
+        count("notified");
+      });
+    }
+  }
+
+  function alerts(list) {
+    var fresh = list.filter(function (a) { return !seen[a.run + ":" + a.state]; });
+    list.forEach(function (a) { seen[a.run + ":" + a.state] = true; });
+    if (fresh.length) { ring(fresh); }
+  }
+
+  function apply(data) {
+    Object.keys(data.fragments).forEach(function (name) {
+      var part = document.getElementById("frag-" + name);
+      if (part) { part.innerHTML = data.fragments[name]; }
+    });
+    if (data.run !== null && !screen.dataset.run) {
+      // No run was shown: show the oldest waiting one, and aim the form at it.
+      screen.dataset.run = String(data.run);
+      var form = document.getElementById("decide");
+      if (form) { form.action = "/review/runs/" + data.run + "/decision"; }
+    }
+    document.title = data.title;
+    updated.textContent = "updated " + data.updated + " " + data.zone;
+    staleSince.textContent = data.updated + " " + data.zone;
+    alerts(data.alerts);
+  }
+
+  function poll() {
+    var url = "/review/live" + (screen.dataset.run ? "?run=" + screen.dataset.run : "");
+    var abort = new AbortController();
+    var timer = window.setTimeout(function () { abort.abort(); }, period);
+    fetch(url, { credentials: "same-origin", cache: "no-store", signal: abort.signal }).then(function (response) {
+      if (response.status === 401) {
+        banner.textContent = "Your session has ended: log in again to see the line.";
+        throw new Error("logged out");
+      }
+      if (!response.ok) { throw new Error("HTTP " + response.status); }
+      return response.json();
+    }).then(function (data) {
+      apply(data);
+      lastOk = Date.now();
+      watch();
+    }).catch(function () { watch(); }).then(function () {
+      window.clearTimeout(timer);
+      window.setTimeout(poll, period);
+    });
+  }
+
+  function watch() {
+    var stale = Date.now() - lastOk > 2 * period;
+    body.classList.toggle("stale", stale);
+    banner.hidden = !stale;
+  }
+
+  document.addEventListener("submit", function (event) {
+    var button = event.submitter;
+    if (button && button.dataset.confirm && !window.confirm(button.dataset.confirm)) {
+      event.preventDefault();
+    }
+  });
+
+  window.setInterval(watch, 1000);
+  window.setTimeout(poll, period);
+})();
