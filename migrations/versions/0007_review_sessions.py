@@ -1,6 +1,6 @@
 """Review-screen login sessions kept on the server: ``review_sessions``.
 
-Revision ID: night_screen_review_sessions
+Revision ID: 0007_review_sessions
 Revises: 0003_transport
 Create Date: 2026-12-02
 
@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import sqlalchemy as sa
 from alembic import op
 
-revision: str = "night_screen_review_sessions"
+revision: str = "0007_review_sessions"
 down_revision: str | None = "0003_transport"
 branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
