@@ -34,38 +34,43 @@ def _baseline(sample: Sample) -> str:
     return detect(sample.image).verdict
 
 
-def _variants(names: list[str]) -> dict[str, dict[str, Verdictor]]:
-    """Per variant: the verdict function to use on scenes of A, of B and on real photos."""
-    out: dict[str, dict[str, Verdictor]] = {}
-    for name in names:
-        if name == "baseline":
-            out[name] = {"A": _baseline, "B": _baseline, "real": _baseline}
-        elif name == "pipeline":
-            from tail_check.pipeline import load_model, run_pipeline
+def _judge(combine: str, model_name: str) -> Verdictor:
+    from tail_check.pipeline import VerdictParams, load_model, run_pipeline
 
-            trained_a, trained_b = load_model("A"), load_model("B")
+    model = load_model(model_name)
+    params = VerdictParams(combine=combine)  # type: ignore[arg-type]
 
-            # Scenes of A are judged by the model trained on B and the other way round;
-            # the shipped model (trained on both) judges the real photos.
-            def on_a(s: Sample) -> str:
-                return run_pipeline(s.image, model=trained_b).verdict
+    def verdict(s: Sample) -> str:
+        return run_pipeline(s.image, model=model, params=params).verdict
 
-            def on_b(s: Sample) -> str:
-                return run_pipeline(s.image, model=trained_a).verdict
+    return verdict
 
-            def on_real(s: Sample) -> str:
-                return run_pipeline(s.image).verdict
 
-            out[name] = {"A": on_a, "B": on_b, "real": on_real}
-        else:
-            raise SystemExit(f"unknown variant {name!r}; use baseline or pipeline")
-    return out
+def _report(variant: str, held: dict[str, list[Sample]], photos: list[Sample]) -> None:
+    if variant == "baseline":
+        for g in ("A", "B"):
+            print("\n".join(tally(held[g], _baseline).lines(f"baseline: generator {g}")))
+        if photos:
+            print("\n".join(tally(photos, _baseline).lines("baseline: real photos")))
+        return
+    if variant not in ("guarded", "learned"):
+        raise SystemExit(f"unknown variant {variant!r}; use baseline, guarded or learned")
+    for g in ("A", "B"):
+        other = "B" if g == "A" else "A"
+        own = tally(held[g], _judge(variant, g))
+        print("\n".join(own.lines(f"{variant}: generator {g}, own (trained on {g})")))
+        cross = tally(held[g], _judge(variant, other))
+        print("\n".join(cross.lines(f"{variant}: generator {g}, CROSS (trained on {other})")))
+    for name in ("A", "B", "AB"):
+        if photos:
+            real = tally(photos, _judge(variant, name))
+            print("\n".join(real.lines(f"{variant}: real photos (trained on {name})")))
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--count", type=int, default=150, help="held-out scenes per generator")
-    parser.add_argument("--variant", nargs="+", default=["baseline", "pipeline"])
+    parser.add_argument("--variant", nargs="+", default=["baseline", "guarded", "learned"])
     args = parser.parse_args(argv)
     os.environ.setdefault("DEPOT_TAIL_CACHE", "var/tail_cache")
     t0 = time.perf_counter()
@@ -74,13 +79,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"scenes ready in {time.perf_counter() - t0:.0f} s; real photos: {len(photos)}")
     if not photos:
         print(f"  (no real photos under {real_dir()}; set DEPOT_REAL_DATA_DIR)")
-    for variant, judge in _variants(args.variant).items():
-        for g in ("A", "B"):
-            other = "B" if g == "A" else "A"
-            how = "no training" if variant == "baseline" else f"verifier trained on {other}"
-            print("\n".join(tally(held[g], judge[g]).lines(f"{variant}: generator {g} ({how})")))
-        if photos:
-            print("\n".join(tally(photos, judge["real"]).lines(f"{variant}: real photos")))
+    for variant in args.variant:
+        _report(variant, held, photos)
     return 0
 
 

@@ -182,10 +182,13 @@ def _tail_synth(args: argparse.Namespace) -> int:
 
 
 def _tail_train(args: argparse.Namespace) -> int:
+    from tail_check.dataset import Generator
     from tail_check.pipeline.train import TrainParams, train
 
-    generators = tuple(args.generators.upper())
-    if not generators or set(generators) - {"A", "B"}:
+    generators: tuple[Generator, ...] = tuple(
+        g for g in args.generators.upper() if g in ("A", "B")
+    )
+    if not generators or len(generators) != len(args.generators):
         return fail(f"--generators must be A, B or AB, got {args.generators!r}")
     out = Path(args.out)
     if out.suffix != ".json":
@@ -194,7 +197,7 @@ def _tail_train(args: argparse.Namespace) -> int:
         return fail(f"folder {out.parent} does not exist; create it or choose another --out")
     params = TrainParams(train_count=args.count, validation_count=args.validation)
     try:
-        model = train(generators, seed=args.seed, params=params)  # type: ignore[arg-type]
+        model = train(generators, seed=args.seed, params=params)
     except ValueError as exc:
         return fail(f"{exc}; train on more scenes (--count)")
     out.write_text(model.to_json() + "\n", encoding="utf-8")

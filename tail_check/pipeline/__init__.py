@@ -53,9 +53,7 @@ def load_model(name: str = "AB") -> TreeModel:
     return TreeModel.load(path)
 
 
-def best_candidate(
-    candidates: list[Candidate], model: TreeModel
-) -> tuple[Candidate | None, float]:
+def best_candidate(candidates: list[Candidate], model: TreeModel) -> tuple[Candidate | None, float]:
     """The candidate with the highest disc probability, and that probability."""
     if not candidates:
         return None, 0.0
@@ -90,12 +88,16 @@ def run_pipeline(
     p = profile if profile is not None else DEFAULT_PROFILE
     m = model if model is not None else load_model()
     hand = detect(image, p)
-    cands, _ = find_candidates(image, p)
+    cands, _ = find_candidates(image, p, hand=hand.candidates)
     best, prob = best_candidate(cands, m)
-    present_at = params.present_threshold or float(m.meta.get("present_threshold", 0.9))
-    uncertain_at = params.uncertain_threshold or float(m.meta.get("uncertain_threshold", 0.3))
+    # The hand-tuned best region comes first when there is one (see find_candidates).
+    first = hand.candidates[0].bbox if hand.candidates else None
+    own = cands[0] if cands and cands[0].bbox == first else None
+    at_hand = float(m.probability(own.features[None, :])[0]) if own is not None else 0.0
+    present_at = params.present_threshold or float(m.meta["present_threshold"])
+    uncertain_at = params.uncertain_threshold or float(m.meta["uncertain_threshold"])
     learned = learned_verdict(prob, present_at, uncertain_at)
-    verdict, reason = combine(hand.verdict, learned, prob, params)
+    verdict, reason = combine(hand.verdict, learned, prob, at_hand, params)
     bbox = hand.bbox
     if verdict != "absent" and (bbox is None or hand.verdict != verdict) and best is not None:
         bbox = best.bbox
@@ -103,6 +105,9 @@ def run_pipeline(
     if verdict == "absent":
         bbox, score = None, min(hand.score, 1.0 - prob)
     return replace(
-        hand, verdict=verdict, score=float(np.clip(score, 0.0, 1.0)), bbox=bbox,
+        hand,
+        verdict=verdict,
+        score=float(np.clip(score, 0.0, 1.0)),
+        bbox=bbox,
         reasons=(reason, *hand.reasons),
     )

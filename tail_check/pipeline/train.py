@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..dataset import Generator, Sample, scenes
+from ..detect import detect
 from ..profile import DEFAULT_PROFILE
 from . import best_candidate
 from .candidates import Candidate, find_candidates
@@ -64,11 +65,14 @@ def _matches(c: Candidate, truth: tuple[int, int, int, int] | None, tp: TrainPar
     return inside and 1.0 / tp.area_ratio <= ratio <= tp.area_ratio
 
 
-def _rows(samples: Iterable[Sample], tp: TrainParams) -> tuple[list[NDArray[np.float64]], list[int]]:
+Rows = tuple[list[NDArray[np.float64]], list[int]]
+
+
+def _rows(samples: Iterable[Sample], tp: TrainParams) -> Rows:
     x: list[NDArray[np.float64]] = []
     y: list[int] = []
     for s in samples:
-        cands, _ = find_candidates(s.image, DEFAULT_PROFILE)
+        cands, _ = find_candidates(s.image, DEFAULT_PROFILE, hand=detect(s.image).candidates)
         for c in cands:
             x.append(c.features)
             y.append(int(s.disc and _matches(c, s.bbox, tp)))
@@ -76,9 +80,11 @@ def _rows(samples: Iterable[Sample], tp: TrainParams) -> tuple[list[NDArray[np.f
 
 
 def _image_probs(samples: list[Sample], model: TreeModel) -> NDArray[np.float64]:
-    return np.asarray(
-        [best_candidate(find_candidates(s.image, DEFAULT_PROFILE)[0], model)[1] for s in samples]
-    )
+    out = []
+    for s in samples:
+        cands, _ = find_candidates(s.image, DEFAULT_PROFILE, hand=detect(s.image).candidates)
+        out.append(best_candidate(cands, model)[1])
+    return np.asarray(out)
 
 
 def _calibrate(
@@ -106,7 +112,10 @@ def _calibrate(
 
 
 def train(
-    generators: tuple[Generator, ...], *, seed: int, params: TrainParams = TrainParams(),
+    generators: tuple[Generator, ...],
+    *,
+    seed: int,
+    params: TrainParams = TrainParams(),
     verifier: VerifierParams = VerifierParams(),
 ) -> TreeModel:
     """Train and calibrate a verifier on the given generators' training seeds."""

@@ -31,19 +31,18 @@ class VerdictParams:
     uncertain_threshold : float or None
         Lower edge of the abstention band; None takes the model's.
     veto_threshold : float
-        In ``guarded`` mode, a hand-tuned ``present`` whose best learned probability is
-        below this is downgraded to ``uncertain``.
+        In ``guarded`` mode, a hand-tuned ``present`` whose own region's learned
+        probability is below this is downgraded to ``uncertain``.
     combine : {"learned", "guarded"}
         ``learned``: the verifier alone. ``guarded``: the hand-tuned verdict, with the
         verifier allowed to *downgrade* ``present`` to ``uncertain`` (veto) and to raise
-        ``absent`` to ``uncertain`` (a possible disc a person should see), and to give
-        ``present`` only where both agree or the verifier alone is above its
-        calibrated threshold and the hand-tuned detector saw a red region there.
+        ``absent`` to ``uncertain`` (a possible disc a person should see); it never
+        makes a ``present`` on its own.
     """
 
     present_threshold: float | None = None
     uncertain_threshold: float | None = None
-    veto_threshold: float = 0.2
+    veto_threshold: float = 0.05
     combine: Combine = "guarded"
 
 
@@ -57,15 +56,22 @@ def learned_verdict(prob: float, present_at: float, uncertain_at: float) -> Verd
 
 
 def combine(
-    hand: Verdict, learned: Verdict, prob: float, params: VerdictParams
+    hand: Verdict, learned: Verdict, prob: float, at_hand: float, params: VerdictParams
 ) -> tuple[Verdict, str]:
-    """Final verdict and the reason, from the hand-tuned and the learned verdicts."""
+    """Final verdict and the reason.
+
+    Parameters
+    ----------
+    hand, learned : the hand-tuned and the learned verdicts
+    prob : the best candidate's disc probability
+    at_hand : the probability of the hand-tuned detector's own best region
+    """
     if params.combine == "learned":
         return learned, f"learned verifier: disc probability {prob:.2f}"
     if hand == "present":
-        if prob < params.veto_threshold:
-            return "uncertain", f"disc-shaped, but the verifier doubts it (p={prob:.2f})"
-        return "present", f"disc-shaped red region, verifier agrees (p={prob:.2f})"
+        if at_hand < params.veto_threshold:
+            return "uncertain", f"disc-shaped, but the verifier doubts it (p={at_hand:.2f})"
+        return "present", f"disc-shaped red region, verifier agrees (p={at_hand:.2f})"
     if learned == "present" or (hand == "absent" and learned == "uncertain"):
         return "uncertain", f"the verifier sees a possible disc (p={prob:.2f}); look"
     return hand, f"verifier disc probability {prob:.2f}"

@@ -78,7 +78,8 @@ class TreeModel:
 
     def probability(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
         """Disc probability per row of ``x`` (shape (n, len(features)))."""
-        x = np.atleast_2d(np.asarray(x, np.float64))
+        # scikit-learn compares float32 features with the thresholds; do the same.
+        x = np.atleast_2d(np.asarray(x, np.float32)).astype(np.float64)
         raw = np.full(x.shape[0], self.base)
         for tree in self.trees:
             raw += self.rate * tree.predict(x)
@@ -96,8 +97,14 @@ class TreeModel:
             }
             for t in self.trees
         ]
-        doc = {"format": FORMAT, "features": list(self.features), "base": self.base,
-               "rate": self.rate, "trees": trees, "meta": self.meta}
+        doc = {
+            "format": FORMAT,
+            "features": list(self.features),
+            "base": self.base,
+            "rate": self.rate,
+            "trees": trees,
+            "meta": self.meta,
+        }
         return json.dumps(doc, indent=None, separators=(",", ":"))
 
     @classmethod
@@ -115,18 +122,23 @@ class TreeModel:
             raise ValueError(f"verifier model is not JSON: {exc}") from None
         if not isinstance(doc, dict) or doc.get("format") != FORMAT:
             raise ValueError(f"not a tail verifier model (expected format {FORMAT})")
+        if "present_threshold" not in doc.get("meta", {}):
+            raise ValueError("verifier model lacks its calibrated thresholds; retrain it")
         if tuple(doc["features"]) != FEATURE_NAMES:
             raise ValueError("verifier model was trained on other features; retrain it")
         trees = tuple(
             _Tree(
-                np.asarray(t["feature"], np.int64), np.asarray(t["threshold"], np.float64),
-                np.asarray(t["left"], np.int64), np.asarray(t["right"], np.int64),
+                np.asarray(t["feature"], np.int64),
+                np.asarray(t["threshold"], np.float64),
+                np.asarray(t["left"], np.int64),
+                np.asarray(t["right"], np.int64),
                 np.asarray(t["value"], np.float64),
             )
             for t in doc["trees"]
         )
-        return cls(FEATURE_NAMES, float(doc["base"]), float(doc["rate"]), trees,
-                   dict(doc.get("meta", {})))
+        return cls(
+            FEATURE_NAMES, float(doc["base"]), float(doc["rate"]), trees, dict(doc.get("meta", {}))
+        )
 
     @classmethod
     def load(cls, path: str | Path) -> TreeModel:
@@ -135,7 +147,10 @@ class TreeModel:
 
 
 def fit(
-    x: NDArray[np.float64], y: NDArray[np.int64], *, seed: int,
+    x: NDArray[np.float64],
+    y: NDArray[np.int64],
+    *,
+    seed: int,
     params: VerifierParams = VerifierParams(),
 ) -> TreeModel:
     """Train the verifier on candidate features ``x`` (n, k) and labels ``y`` (n,) of 0/1.
@@ -150,22 +165,34 @@ def fit(
     if len(set(y.tolist())) < 2:
         raise ValueError("training needs both disc and non-disc candidates")
     clf = GradientBoostingClassifier(
-        n_estimators=params.n_estimators, max_depth=params.max_depth,
-        learning_rate=params.learning_rate, subsample=params.subsample,
-        min_samples_leaf=params.min_samples_leaf, random_state=seed,
+        n_estimators=params.n_estimators,
+        max_depth=params.max_depth,
+        learning_rate=params.learning_rate,
+        subsample=params.subsample,
+        min_samples_leaf=params.min_samples_leaf,
+        random_state=seed,
     )
     clf.fit(x, y)
     prior = float(np.clip(y.mean(), 1e-6, 1 - 1e-6))
     trees = []
     for est in clf.estimators_[:, 0]:
         t = est.tree_
-        trees.append(_Tree(
-            np.asarray(t.feature, np.int64).clip(min=0), np.asarray(t.threshold, np.float64),
-            np.asarray(t.children_left, np.int64), np.asarray(t.children_right, np.int64),
-            np.asarray(t.value[:, 0, 0], np.float64),
-        ))
-    model = TreeModel(FEATURE_NAMES, float(np.log(prior / (1 - prior))),
-                      float(params.learning_rate), tuple(trees), {})
+        trees.append(
+            _Tree(
+                np.asarray(t.feature, np.int64).clip(min=0),
+                np.asarray(t.threshold, np.float64),
+                np.asarray(t.children_left, np.int64),
+                np.asarray(t.children_right, np.int64),
+                np.asarray(t.value[:, 0, 0], np.float64),
+            )
+        )
+    model = TreeModel(
+        FEATURE_NAMES,
+        float(np.log(prior / (1 - prior))),
+        float(params.learning_rate),
+        tuple(trees),
+        {},
+    )
     expected = clf.predict_proba(x)[:, 1]
     if not np.allclose(model.probability(x), expected, atol=1e-6):
         raise RuntimeError("exported trees disagree with scikit-learn; export is broken")
