@@ -8,8 +8,13 @@ PNG under ``var/tail_cache`` because generator B takes about a second per scene.
 
 Expected on these seeds (measured, guarded pipeline = hand-tuned detector with the
 learned verifier able only to veto a `present` or to raise an `absent` to `uncertain`):
-see the constants below. The safety property (no false `present`) is asserted exactly;
-the accuracy floors sit a few points under the measured value.
+A (verifier trained on B): 95.8 % correct (disc 9/1/0 present/uncertain/absent, no disc
+0/0/14); B (verifier trained on A): 50.0 % correct (disc 0/3/9, no disc 0/0/12). The
+issue's target (>= 95 % cross-generator) is NOT met on B: most of B's discs give no
+disc-shaped region to the hand-tuned detector. The safety property (no false `present`)
+is asserted exactly; the accuracy floors sit a few points under the measured value. On
+150 held-out seeds one false `present` remains (a hand wheel, A seed 300044): see the
+strict xfail below.
 """
 
 from __future__ import annotations
@@ -44,7 +49,7 @@ def _cross(generator: str) -> Tally:
     return result
 
 
-EXPECTED = {"A": (0.0, 0.0), "B": (0.0, 0.0)}
+EXPECTED = {"A": (0.958, 0.90), "B": (0.50, 0.45)}
 """(measured share correct, floor asserted) per generator on these seeds."""
 
 
@@ -55,6 +60,13 @@ def test_cross_generator_no_false_present_and_accuracy(generator: str) -> None:
     assert result.overall.false_present == 0, result.false_present_names
     measured, floor = EXPECTED[generator]
     assert result.overall.correct >= floor, (result.overall.summary(), measured)
+
+
+@pytest.mark.xfail(strict=True, reason="known false present: a hand wheel (A seed 300044)")
+def test_known_false_present_on_a_hand_wheel() -> None:
+    sample = next(scenes("A", "heldout", 1, offset=44))
+    assert not sample.disc and sample.kind == "hand_wheel"
+    assert run_pipeline(sample.image, model=load_model("B")).verdict != "present"
 
 
 @pytest.mark.parametrize("model_name", ["AB", "A", "B"])
