@@ -1,0 +1,88 @@
+"""Accuracy of the tail-disc detector: confusion matrices that cannot fool themselves.
+
+For each detector variant it prints the confusion (present/uncertain/absent vs truth)
+overall, per condition and per hard-negative kind on
+
+(a) each generator's held-out seeds (the generator a learned verifier was trained on),
+(b) the cross-generator split (trained on one generator, evaluated on the other),
+(c) every real photo (``DEPOT_REAL_DATA_DIR``; none shows a disc).
+
+The hand-tuned detector has no training, so for it (a) and (b) are the same scenes.
+Rendered scenes are cached under ``var/tail_cache`` (``DEPOT_TAIL_CACHE``).
+
+Run: ``.venv/bin/python -m bench.tail_accuracy [--count N] [--variant NAME ...]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from collections.abc import Callable
+
+import cv2
+
+from tail_check import detect
+from tail_check.dataset import Sample, real_dir, real_photos, scenes
+from tail_check.evaluate import tally
+
+cv2.setNumThreads(1)
+Verdictor = Callable[[Sample], str]
+
+
+def _baseline(sample: Sample) -> str:
+    return detect(sample.image).verdict
+
+
+def _judge(combine: str, model_name: str) -> Verdictor:
+    from tail_check.pipeline import VerdictParams, load_model, run_pipeline
+
+    model = load_model(model_name)
+    params = VerdictParams(combine=combine)  # type: ignore[arg-type]
+
+    def verdict(s: Sample) -> str:
+        return run_pipeline(s.image, model=model, params=params).verdict
+
+    return verdict
+
+
+def _report(variant: str, held: dict[str, list[Sample]], photos: list[Sample]) -> None:
+    if variant == "baseline":
+        for g in ("A", "B"):
+            print("\n".join(tally(held[g], _baseline).lines(f"baseline: generator {g}")))
+        if photos:
+            print("\n".join(tally(photos, _baseline).lines("baseline: real photos")))
+        return
+    if variant not in ("guarded", "learned"):
+        raise SystemExit(f"unknown variant {variant!r}; use baseline, guarded or learned")
+    for g in ("A", "B"):
+        other = "B" if g == "A" else "A"
+        own = tally(held[g], _judge(variant, g))
+        print("\n".join(own.lines(f"{variant}: generator {g}, own (trained on {g})")))
+        cross = tally(held[g], _judge(variant, other))
+        print("\n".join(cross.lines(f"{variant}: generator {g}, CROSS (trained on {other})")))
+    for name in ("A", "B", "AB"):
+        if photos:
+            real = tally(photos, _judge(variant, name))
+            print("\n".join(real.lines(f"{variant}: real photos (trained on {name})")))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--count", type=int, default=150, help="held-out scenes per generator")
+    parser.add_argument("--variant", nargs="+", default=["baseline", "guarded", "learned"])
+    args = parser.parse_args(argv)
+    os.environ.setdefault("DEPOT_TAIL_CACHE", "var/tail_cache")
+    t0 = time.perf_counter()
+    held = {g: list(scenes(g, "heldout", args.count)) for g in ("A", "B")}
+    photos = list(real_photos())
+    print(f"scenes ready in {time.perf_counter() - t0:.0f} s; real photos: {len(photos)}")
+    if not photos:
+        print(f"  (no real photos under {real_dir()}; set DEPOT_REAL_DATA_DIR)")
+    for variant in args.variant:
+        _report(variant, held, photos)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
