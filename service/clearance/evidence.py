@@ -87,9 +87,7 @@ def owing_devices(
     return [
         device.id
         for device in section_devices(session, section, station)
-        if device.kind in kinds
-        and device.id not in contributed
-        and silent_at(session, device, at)
+        if device.kind in kinds and device.id not in contributed and silent_at(session, device, at)
     ]
 
 
@@ -210,7 +208,12 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
     passages = list(session.scalars(select(CarPassage).where(CarPassage.run_id == run.id)))
     readings = list(session.scalars(select(AxleReading).where(AxleReading.run_id == run.id)))
     eot, eot_rows = _eot(session, run)
-    contributed = {row.device_id for row in (*snapshots, *passages, *readings, *eot_rows)}
+    contributed = (
+        {s.device_id for s in snapshots}
+        | {p.device_id for p in passages}
+        | {r.device_id for r in readings}
+        | {e.device_id for e in eot_rows}
+    )
     arrival = moment(run, "arrival")
     stale = set(owing_devices(session, section, run.to_station, arrival, contributed))
     stale |= set(

@@ -14,7 +14,6 @@ from ingest.handlers import Derivation
 from service.clearance import service
 from service.clearance.models import AxleReading, CarPassage, EotReport, WheelMarking
 
-
 Row = TypeVar("Row")
 
 

@@ -63,7 +63,9 @@ def create_device(body: DeviceIn, session: DbSession, _: Admin) -> Any:
 @router.get("/devices", response_model=list[DeviceOut])
 def list_devices(session: DbSession, _: CurrentReader) -> Any:
     now = utcnow()
-    return [service.device_view(d, now) for d in session.scalars(select(Device).order_by(Device.id))]
+    return [
+        service.device_view(d, now) for d in session.scalars(select(Device).order_by(Device.id))
+    ]
 
 
 @router.get("/devices/{device_id}", response_model=DeviceOut)

@@ -85,17 +85,13 @@ def test_the_review_form_refuses_a_repeated_decision_too(
     assert login.status_code == 200
     form = {"action": "keep_blocked", "reason": "sending a walker"}
     for _ in range(2):
-        answer = line.client.post(
-            f"/review/runs/{run}/decision", data=form, follow_redirects=False
-        )
+        answer = line.client.post(f"/review/runs/{run}/decision", data=form, follow_redirects=False)
         assert answer.status_code == 303
     assert audit_count(line) == 1
     assert line.section()["state"] == "blocked"
 
 
-def test_the_run_says_which_action_by_whom_and_when(
-    line: Line, dispatcher: dict[str, str]
-) -> None:
+def test_the_run_says_which_action_by_whom_and_when(line: Line, dispatcher: dict[str, str]) -> None:
     run = arrived_for_review(line)
     fresh = line.client.get(f"/api/v1/runs/{run}", headers=ADMIN).json()["decision"]
     assert fresh["action"] is None and fresh["actor"] is None and fresh["acted_at"] is None

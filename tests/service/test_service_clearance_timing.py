@@ -94,7 +94,9 @@ def _late_arrival_count(line: Line) -> None:
 def _clock_behind(line: Line) -> None:
     _departure_only(line)
     # B-ir's clock is 3 h behind, but the server heard from it 30 s before arrival.
-    line.post("B-ir", "heartbeat", ARRIVE - timedelta(hours=3), received=ARRIVE - timedelta(seconds=30))
+    line.post(
+        "B-ir", "heartbeat", ARRIVE - timedelta(hours=3), received=ARRIVE - timedelta(seconds=30)
+    )
 
 
 TIMINGS = [
