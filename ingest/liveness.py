@@ -128,3 +128,10 @@ def silent_at(session: Session, device: Device, at: datetime) -> bool:
     if device.decommissioned_at is not None and device.decommissioned_at <= at:
         return False
     return silent(last_received_before(session, device.id, at), at)
+
+
+def stale_devices(session: Session, now: datetime) -> list[Device]:
+    """Every device stale at server time ``now`` (by :func:`is_stale`), in id order: the list a
+    screen shows (it may leave out kinds that do not serve a section)."""
+    devices = session.scalars(select(Device).order_by(Device.id))
+    return [device for device in devices if is_stale(device, now)]

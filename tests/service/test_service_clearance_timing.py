@@ -13,7 +13,9 @@ from datetime import datetime, timedelta
 
 import pytest
 from fastapi.testclient import TestClient
+from sqlalchemy.orm import Session
 
+from ingest.liveness import stale_devices
 from tests.conftest import ADMIN
 from tests.service.clock import ServerClock, server_clock  # noqa: F401 (fixture)
 from tests.service.linekit import build_line
@@ -133,7 +135,11 @@ def test_evidence_timing(line: Line, timing: Timing) -> None:
     assert run["evidence"]["stale_devices"] == []
 
 
-def test_a_decommissioned_device_is_not_silent(line: Line, server_clock: ServerClock) -> None:  # noqa: F811
+def test_a_decommissioned_device_is_not_silent(
+    session: Session,
+    line: Line,
+    server_clock: ServerClock,  # noqa: F811
+) -> None:
     depart_with(line)
     server_clock.set(T0 + timedelta(minutes=5))
     answer = line.client.post("/api/v1/devices/B-ir/decommission", headers=ADMIN)
@@ -142,6 +148,8 @@ def test_a_decommissioned_device_is_not_silent(line: Line, server_clock: ServerC
     assert result["verdict"] == "complete", result
     device = line.client.get("/api/v1/devices/B-ir", headers=ADMIN).json()
     assert device["stale"] is None  # decommissioned: no heartbeat is expected any more
+    listed = [d.id for d in stale_devices(session, ARRIVE + timedelta(minutes=5))]
+    assert "B-ir" not in listed and "B-ac" in listed  # the screen's list, by the same rule
 
 
 def test_last_seen_is_when_the_server_received(line: Line, server_clock: ServerClock) -> None:  # noqa: F811
