@@ -64,7 +64,7 @@ class Device(Base):
     section: Mapped[str | None] = mapped_column(ForeignKey("sections.id"), nullable=True)
     kind: Mapped[str] = mapped_column(String(32))
     key_hash: Mapped[str] = mapped_column(String(64), unique=True)
-    # Latest device time (`occurred_at`) of anything the device sent: the heartbeat clock.
+    # When the server last received anything from the device (not the device's clock).
     last_seen_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
     created_at: Mapped[datetime] = mapped_column(UTCDateTime(), default=utcnow)
     # Set once: from then on the device's events are refused (401); its history stays.

@@ -5,8 +5,9 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 from typing import Literal
+from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 DEVELOPMENT_ADMIN_TOKEN = "dev-admin-token"
@@ -36,6 +37,8 @@ class Settings(BaseSettings):
         default=None, gt=0, description="seconds between scheduled forecasts"
     )
     review_refresh_s: int = Field(default=10, ge=2)
+    # The dispatcher's time zone (IANA name): every time shown to people (core/timefmt.py).
+    time_zone: str = "UTC"
     # How long a worker trusts a device key it has looked up: the revocation bound (≤ 5 s).
     device_key_ttl_s: float = Field(default=2.0, ge=0, le=5)
     # Group commit of single events: how long the first event waits for neighbours (0: off),
@@ -57,6 +60,17 @@ class Settings(BaseSettings):
     transport_batch: int = Field(
         default=200, ge=1, le=1000, description="messages committed together, at most"
     )
+
+    @field_validator("time_zone")
+    @classmethod
+    def _known_zone(cls, name: str) -> str:
+        try:
+            ZoneInfo(name)
+        except (ZoneInfoNotFoundError, ValueError):
+            raise ValueError(
+                f"DEPOT_TIME_ZONE {name!r} is not an IANA time zone; use e.g. UTC or Europe/Kyiv"
+            ) from None
+        return name
 
     @model_validator(mode="after")
     def _refuse_unsafe_production(self) -> Settings:

@@ -58,12 +58,13 @@ def has_handlers(kind: str) -> bool:
 
 def derive(derivation: Derivation) -> dict[str, Any]:
     """Run every handler of the event's kind; merge what they report for the client."""
-    # Liveness has the heartbeat period's granularity: a device sending many events a second
-    # need not rewrite its row for each one (decisions read staleness from the raw events).
+    # Liveness counts from when the server received the event, not the device's clock; it has
+    # a granularity step: a device sending many events a second need not rewrite its row for
+    # each one (decisions read staleness from the raw events' receive times).
     touch(
         derivation.session,
         derivation.device,
-        derivation.raw.occurred_at,
+        derivation.raw.received_at,
         replaying=derivation.replaying,
     )
     result: dict[str, Any] = {}

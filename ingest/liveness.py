@@ -1,10 +1,18 @@
-"""A device's ``last_seen_at``, written at most once per granularity step, without a read.
+"""Device liveness: when the server last heard from a device, and the one staleness rule.
 
-The rule (the same live and on replay): an event moves ``last_seen_at`` to its ``occurred_at``
-when that is more than ``LAST_SEEN_GRANULARITY`` past the stored value. It is one conditional
-``UPDATE``; the worker remembers a committed lower bound of each device's value so that the
-``UPDATE`` is not even sent when it could not match (the stored value only grows), which spares
-a device sending many events a second a write for each one.
+Liveness is judged by the times the server *received* a device's events (protocol.md), never
+by the device's own ``occurred_at``: a device clock set to 2030 cannot keep itself alive, and
+one running hours behind is not silent while it talks. (The device's times still order its
+evidence.) A device is **stale** when nothing from it was received within ``DEPOT_HEARTBEAT_S``;
+a decommissioned device is not expected to speak, so it is never stale (:func:`is_stale`).
+
+``last_seen_at`` is written at most once per granularity step, without a read. The rule (the
+same live and on replay): an event moves ``last_seen_at`` to its ``received_at`` when that is
+more than ``LAST_SEEN_GRANULARITY`` past the stored value. It is one conditional ``UPDATE``;
+the worker remembers a committed lower bound of each device's value so that the ``UPDATE`` is
+not even sent when it could not match (the stored value only grows), which spares a device
+sending many events a second a write for each one. The stored value may thus lag by one step:
+a device looks stale at most that much early, never late.
 """
 
 from __future__ import annotations
@@ -12,10 +20,12 @@ from __future__ import annotations
 import time
 from datetime import datetime, timedelta
 
-from sqlalchemy import Table, event, or_, update
+from sqlalchemy import Table, event, func, or_, select, update
 from sqlalchemy.orm import Session
 
 from core.models import Device
+from core.settings import get_settings
+from ingest.models import RawEvent
 
 LAST_SEEN_GRANULARITY = timedelta(seconds=5)
 # How long a remembered bound is trusted: ``depot replay`` resets the column underneath.
@@ -49,8 +59,9 @@ event.listen(Session, "after_commit", learn_committed)
 event.listen(Session, "after_rollback", forget_pending)
 
 
-def touch(session: Session, device: Device, occurred: datetime, *, replaying: bool) -> None:
-    """Apply the liveness rule for one event of ``device``."""
+def touch(session: Session, device: Device, received: datetime, *, replaying: bool) -> None:
+    """Apply the liveness rule for one event of ``device``, received by the server at
+    ``received`` (the raw event's ``received_at``: the same on replay)."""
     ident = (device.key_hash or "", device.id)
     pending = _pending(session)
     bound = pending.get(ident)
@@ -58,19 +69,19 @@ def touch(session: Session, device: Device, occurred: datetime, *, replaying: bo
         known = _known.get(ident)
         if known is not None and time.monotonic() - known[1] < KNOWN_FOR_S:
             bound = known[0]
-    if bound is not None and occurred <= bound + LAST_SEEN_GRANULARITY:
+    if bound is not None and received <= bound + LAST_SEEN_GRANULARITY:
         return  # the stored value is within one step of this event already
-    threshold = occurred - LAST_SEEN_GRANULARITY
+    threshold = received - LAST_SEEN_GRANULARITY
     moved = session.execute(
         update(_DEVICES)
         .where(
             _DEVICES.c.id == device.id,
             or_(_DEVICES.c.last_seen_at.is_(None), _DEVICES.c.last_seen_at < threshold),
         )
-        .values(last_seen_at=occurred)
+        .values(last_seen_at=received)
     )
-    # Moved: the value is now ``occurred``; not moved: it was at least ``threshold`` already.
-    new_bound = occurred if moved.rowcount else threshold  # type: ignore[attr-defined]
+    # Moved: the value is now ``received``; not moved: it was at least ``threshold`` already.
+    new_bound = received if moved.rowcount else threshold  # type: ignore[attr-defined]
     if bound is None or new_bound > bound:
         pending[ident] = new_bound
 
@@ -82,3 +93,45 @@ def snapshot_pending(session: Session) -> dict[tuple[str, str], datetime]:
 def restore_pending(session: Session, saved: dict[tuple[str, str], datetime]) -> None:
     """After a savepoint rolled back: what it wrote about liveness is gone with it."""
     session.info["depot_seen"] = dict(saved)
+
+
+def heartbeat_limit() -> timedelta:
+    """How long a device may be silent before it is stale (``DEPOT_HEARTBEAT_S``)."""
+    return timedelta(seconds=get_settings().heartbeat_s)
+
+
+def silent(last_received: datetime | None, now: datetime) -> bool:
+    """The staleness rule: nothing received from the device within the heartbeat period."""
+    return last_received is None or now - last_received > heartbeat_limit()
+
+
+def is_stale(device: Device, now: datetime) -> bool | None:
+    """Whether ``device`` is stale at server time ``now``; ``None`` once it is decommissioned
+    (from then on no heartbeat is expected, so its silence means nothing)."""
+    if device.decommissioned_at is not None and device.decommissioned_at <= now:
+        return None
+    return silent(device.last_seen_at, now)
+
+
+def last_received_before(session: Session, device_id: str, at: datetime) -> datetime | None:
+    """When the server last received anything from the device up to server time ``at``
+    (exact, from the raw events: deterministic on replay)."""
+    return session.scalar(
+        select(func.max(RawEvent.received_at)).where(
+            RawEvent.device_id == device_id, RawEvent.received_at <= at
+        )
+    )
+
+
+def silent_at(session: Session, device: Device, at: datetime) -> bool:
+    """Whether ``device`` was stale at server time ``at`` (a decision's moment)."""
+    if device.decommissioned_at is not None and device.decommissioned_at <= at:
+        return False
+    return silent(last_received_before(session, device.id, at), at)
+
+
+def stale_devices(session: Session, now: datetime) -> list[Device]:
+    """Every device stale at server time ``now`` (by :func:`is_stale`), in id order: the list a
+    screen shows (it may leave out kinds that do not serve a section)."""
+    devices = session.scalars(select(Device).order_by(Device.id))
+    return [device for device in devices if is_stale(device, now)]

@@ -17,8 +17,8 @@ class RawEvent(Base):
     __tablename__ = "raw_events"
     __table_args__ = (
         UniqueConstraint("device_id", "event_id"),
-        # Serves "latest event of a device before t" (heartbeat staleness at decision time).
-        Index("ix_raw_events_device_id_occurred_at", "device_id", "occurred_at"),
+        # Serves "latest event of a device received before t" (staleness at decision time).
+        Index("ix_raw_events_device_id_received_at", "device_id", "received_at"),
     )
 
     id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)

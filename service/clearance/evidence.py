@@ -6,13 +6,14 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 from typing import Any
 
-from sqlalchemy import func, select
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from core.models import Car, Device, Section
-from core.settings import get_settings
+from core.schemas import format_instant
 from identification.consist import compare_consists
-from ingest.models import RawEvent, Snapshot
+from ingest.liveness import silent_at
+from ingest.models import Snapshot
 from service.clearance.models import AxleReading, CarPassage, EotReport, Run
 from service.clearance.rules import (
     ConsistEvidence,
@@ -29,6 +30,7 @@ from tail_check.profile import CameraProfile
 # the same instant: evidence within this window of a run still belongs to it.
 EVIDENCE_WINDOW = timedelta(minutes=10)
 EVIDENCE_DEVICE_KINDS = ("camera", "wheel_mark_reader", "ir_reader", "axle_counter")
+EOT_KINDS = ("eot_receiver",)
 DEFAULT_ABSENT_CONFIDENCE = CameraProfile().absent_confidence
 # An EOT report counts for the run between departure and this long after arrival (clearance.md).
 EOT_AFTER_ARRIVAL = timedelta(seconds=60)
@@ -57,31 +59,36 @@ def side_of(run: Run, station: str) -> str | None:
     return None
 
 
-def last_seen_before(session: Session, device_id: str, at: datetime) -> datetime | None:
-    """Latest device time of anything the device sent up to ``at`` (deterministic on replay)."""
-    return session.scalar(
-        select(func.max(RawEvent.occurred_at)).where(
-            RawEvent.device_id == device_id, RawEvent.occurred_at <= at
-        )
-    )
+def moment(run: Run, side: str) -> datetime:
+    """The server time at which one side's devices are judged silent or alive: when the server
+    received the departure (or the arrival). Device times stand in for runs stored before
+    those were recorded."""
+    departure = run.departure_received_at or run.departed_at
+    if side == "departure":
+        return departure
+    return run.arrival_received_at or run.arrived_at or departure
 
 
-def stale_devices(
+def owing_devices(
     session: Session,
     section: Section,
     station: str,
     at: datetime,
+    contributed: set[str],
     kinds: tuple[str, ...] = EVIDENCE_DEVICE_KINDS,
 ) -> list[str]:
-    limit = timedelta(seconds=get_settings().heartbeat_s)
-    stale = []
-    for device in section_devices(session, section, station):
-        if device.kind not in kinds:
-            continue
-        seen = last_seen_before(session, device.id, at)
-        if seen is None or at - seen > limit:
-            stale.append(device.id)
-    return stale
+    """Devices at one end of the section whose evidence did not come and who were silent
+    (:func:`ingest.liveness.silent_at`) at server time ``at``.
+
+    Staleness only ever explains evidence that is missing: a device that reported for the run
+    counts with what it reported, however quiet it went afterwards, and a late report counts
+    when it comes. A decommissioned device owes nothing.
+    """
+    return [
+        device.id
+        for device in section_devices(session, section, station)
+        if device.kind in kinds and device.id not in contributed and silent_at(session, device, at)
+    ]
 
 
 def _tail(snapshots: list[Snapshot], side: str) -> TailEvidence | None:
@@ -148,7 +155,7 @@ def _axles(
     return None if any(c is None for c in cars) else sum(c.axles for c in cars if c is not None)
 
 
-def _eot(session: Session, run: Run, stale: set[str]) -> tuple[EotEvidence | None, list[EotReport]]:
+def _eot(session: Session, run: Run) -> tuple[EotEvidence | None, list[EotReport]]:
     """Arrival-side EOT reports from departure to arrival + 60 s, oldest first."""
     rows = [
         r
@@ -157,8 +164,7 @@ def _eot(session: Session, run: Run, stale: set[str]) -> tuple[EotEvidence | Non
             .where(EotReport.run_id == run.id, EotReport.side == "arrival")
             .order_by(EotReport.occurred_at, EotReport.id)
         )
-        if r.device_id not in stale
-        and r.occurred_at >= run.departed_at
+        if r.occurred_at >= run.departed_at
         and (run.arrived_at is None or r.occurred_at <= run.arrived_at + EOT_AFTER_ARRIVAL)
     ]
     if run.eot_unit is None and not rows:
@@ -177,7 +183,7 @@ def _eot_summary(evidence: RunEvidence, rows: list[EotReport]) -> dict[str, Any]
             {
                 "id": r.id,
                 "device": r.device_id,
-                "occurred_at": r.occurred_at.isoformat().replace("+00:00", "Z"),
+                "occurred_at": format_instant(r.occurred_at),
                 "unit_address": r.unit_address,
                 "pressure_psig": r.pressure_psig,
                 "motion": r.motion,
@@ -196,31 +202,30 @@ class Gathered:
 
 
 def gather(session: Session, run: Run, section: Section) -> Gathered:
-    """Everything attached to the run, with stale devices' evidence counted missing."""
-    at = run.arrived_at or run.departed_at
-    stale = set(stale_devices(session, section, run.to_station, at))
-    stale |= set(stale_devices(session, section, run.from_station, run.departed_at))
+    """Everything attached to the run, and the devices whose evidence is missing because
+    they were silent (their items stay ``None``: missing, never assumed)."""
+    snapshots = list(session.scalars(select(Snapshot).where(Snapshot.run_id == run.id)))
+    passages = list(session.scalars(select(CarPassage).where(CarPassage.run_id == run.id)))
+    readings = list(session.scalars(select(AxleReading).where(AxleReading.run_id == run.id)))
+    eot, eot_rows = _eot(session, run)
+    contributed = (
+        {s.device_id for s in snapshots}
+        | {p.device_id for p in passages}
+        | {r.device_id for r in readings}
+        | {e.device_id for e in eot_rows}
+    )
+    arrival = moment(run, "arrival")
+    stale = set(owing_devices(session, section, run.to_station, arrival, contributed))
+    stale |= set(
+        owing_devices(session, section, run.from_station, moment(run, "departure"), contributed)
+    )
     if run.eot_unit is not None:  # the receiver's silence matters only for EOT-equipped trains
-        stale |= set(stale_devices(session, section, run.to_station, at, ("eot_receiver",)))
-    snapshots = [
-        s
-        for s in session.scalars(select(Snapshot).where(Snapshot.run_id == run.id))
-        if s.device_id not in stale
-    ]
-    passages = [
-        p
-        for p in session.scalars(select(CarPassage).where(CarPassage.run_id == run.id))
-        if p.device_id not in stale
-    ]
-    readings = [
-        r
-        for r in session.scalars(select(AxleReading).where(AxleReading.run_id == run.id))
-        if r.device_id not in stale
-    ]
+        stale |= set(
+            owing_devices(session, section, run.to_station, arrival, contributed, EOT_KINDS)
+        )
     families = consists(passages)
     consist, shown = compare_families(families)
     best = families.get("wheel") or families.get("ir") or {}
-    eot, eot_rows = _eot(session, run, stale)
     evidence = RunEvidence(
         arrival_tail=_tail(snapshots, "arrival"),
         departure_tail=_tail(snapshots, "departure"),

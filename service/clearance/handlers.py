@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 from sqlalchemy import select
 
@@ -12,6 +13,28 @@ from identification.consist import majority_number
 from ingest.handlers import Derivation
 from service.clearance import service
 from service.clearance.models import AxleReading, CarPassage, EotReport, WheelMarking
+
+Row = TypeVar("Row")
+
+
+def evidence_row(model: Callable[..., Row], d: Derivation, **fields: Any) -> Row:
+    """A piece of evidence from the event: the columns every evidence table shares
+    (``EvidenceColumns``: raw id, device, its station, the event's section and device time)
+    plus the model's own ``fields``."""
+    return model(
+        id=d.raw.id,
+        device_id=d.device.id,
+        station=d.device.station,
+        section=d.event.section,
+        occurred_at=d.event.occurred_at,
+        **fields,
+    )
+
+
+def attach_evidence(d: Derivation, row: Any) -> dict[str, Any]:
+    """Store the row and attach it to the run holding its section at its device time."""
+    d.session.add(row)
+    return service.attach(d.session, row, row.section, row.station, row.occurred_at)
 
 
 def train_departed(d: Derivation) -> dict[str, Any]:
@@ -23,36 +46,30 @@ def train_departed(d: Derivation) -> dict[str, Any]:
         d.event.train,
         d.event.occurred_at,
         eot_unit=d.event.eot_unit,
+        received=d.raw.received_at,
     )
 
 
 def train_arrived(d: Derivation) -> dict[str, Any]:
     return service.close_run(
-        d.session, d.event.section, d.device.station, d.event.train, d.event.occurred_at
+        d.session,
+        d.event.section,
+        d.device.station,
+        d.event.train,
+        d.event.occurred_at,
+        received=d.raw.received_at,
     )
 
 
 def axle_count(d: Derivation) -> dict[str, Any]:
-    row = AxleReading(
-        id=d.raw.id,
-        device_id=d.device.id,
-        station=d.device.station,
-        section=d.event.section,
-        occurred_at=d.event.occurred_at,
-        axles=d.event.axles,
-    )
-    d.session.add(row)
-    return service.attach(d.session, row, d.event.section, d.device.station, d.event.occurred_at)
+    return attach_evidence(d, evidence_row(AxleReading, d, axles=d.event.axles))
 
 
 def eot_status(d: Derivation) -> dict[str, Any]:
     e = d.event
-    row = EotReport(
-        id=d.raw.id,
-        device_id=d.device.id,
-        station=d.device.station,
-        section=e.section,
-        occurred_at=e.occurred_at,
+    row = evidence_row(
+        EotReport,
+        d,
         unit_address=e.unit_address,
         pressure_psig=e.pressure_psig,
         motion=e.motion,
@@ -60,8 +77,7 @@ def eot_status(d: Derivation) -> dict[str, Any]:
         battery_charge=e.battery_charge,
         bits=e.bits,
     )
-    d.session.add(row)
-    return service.attach(d.session, row, e.section, d.device.station, e.occurred_at)
+    return attach_evidence(d, row)
 
 
 def _decode_ir_pulses(event: Any) -> tuple[int | None, dict[str, Any]]:
@@ -106,22 +122,10 @@ def car_passage(d: Derivation) -> dict[str, Any]:
     number, detail = DECODERS[d.event.kind](d.event)
     column = Car.wheel_code if d.event.kind == "wheel_marks" else Car.ir_number
     car_id = None if number is None else d.session.scalar(select(Car.id).where(column == number))
-    row = CarPassage(
-        id=d.raw.id,
-        device_id=d.device.id,
-        station=d.device.station,
-        section=d.event.section,
-        occurred_at=d.event.occurred_at,
-        kind=d.event.kind,
-        number=number,
-        car_id=car_id,
-        detail=detail,
+    row = evidence_row(
+        CarPassage, d, kind=d.event.kind, number=number, car_id=car_id, detail=detail
     )
-    d.session.add(row)
-    attached = service.attach(
-        d.session, row, d.event.section, d.device.station, d.event.occurred_at
-    )
-    return {"car_number": number, "car": car_id, **attached}
+    return {"car_number": number, "car": car_id, **attach_evidence(d, row)}
 
 
 def wheel_marks_written(d: Derivation) -> dict[str, Any]:

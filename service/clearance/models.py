@@ -38,57 +38,54 @@ class Run(Base):
     cleared_by: Mapped[int | None] = mapped_column(BigId, nullable=True)
     # The EOT unit address armed on this train (``train_departed.eot_unit``), if any.
     eot_unit: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    # When the server received the departure and the arrival: the moments at which each
+    # side's devices are judged silent or not (liveness counts receive times, not device time).
+    departure_received_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+    arrival_received_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
 
 
-class EotReport(Base):
-    """One ``eot_status`` report of an EOT radio receiver (same id as its event)."""
-
-    __tablename__ = "eot_reports"
+class EvidenceColumns:
+    """What every piece of run evidence has: the sending device and where it stands, the
+    device's time (which orders the evidence), and the run and side it was attached to.
+    The id is the raw event's id (:func:`service.clearance.handlers.evidence_row` fills these)."""
 
     id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=False)
     device_id: Mapped[str] = mapped_column(ForeignKey("devices.id"))
     station: Mapped[str] = mapped_column(String(32))
     section: Mapped[str] = mapped_column(String(32), index=True)
     occurred_at: Mapped[datetime] = mapped_column(UTCDateTime())
+    run_id: Mapped[int | None] = mapped_column(BigId, nullable=True, index=True)
+    side: Mapped[str | None] = mapped_column(String(16), nullable=True)
+
+
+class EotReport(EvidenceColumns, Base):
+    """One ``eot_status`` report of an EOT radio receiver (same id as its event)."""
+
+    __tablename__ = "eot_reports"
+
     unit_address: Mapped[int] = mapped_column(Integer)
     pressure_psig: Mapped[int] = mapped_column(Integer)
     motion: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
     marker_light: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
     battery_charge: Mapped[int | None] = mapped_column(Integer, nullable=True)
     bits: Mapped[str | None] = mapped_column(String(74), nullable=True)
-    run_id: Mapped[int | None] = mapped_column(BigId, nullable=True, index=True)
-    side: Mapped[str | None] = mapped_column(String(16), nullable=True)
 
 
-class CarPassage(Base):
+class CarPassage(EvidenceColumns, Base):
     """One car passing a reader, decoded; derived from a reader event (same id)."""
 
     __tablename__ = "car_passages"
 
-    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=False)
-    device_id: Mapped[str] = mapped_column(ForeignKey("devices.id"))
-    station: Mapped[str] = mapped_column(String(32))
-    section: Mapped[str] = mapped_column(String(32), index=True)
-    occurred_at: Mapped[datetime] = mapped_column(UTCDateTime())
     kind: Mapped[str] = mapped_column(String(32))
     number: Mapped[int | None] = mapped_column(Integer, nullable=True)
     car_id: Mapped[str | None] = mapped_column(String(32), nullable=True)
     detail: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
-    run_id: Mapped[int | None] = mapped_column(BigId, nullable=True, index=True)
-    side: Mapped[str | None] = mapped_column(String(16), nullable=True)
 
 
-class AxleReading(Base):
+class AxleReading(EvidenceColumns, Base):
     __tablename__ = "axle_readings"
 
-    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=False)
-    device_id: Mapped[str] = mapped_column(ForeignKey("devices.id"))
-    station: Mapped[str] = mapped_column(String(32))
-    section: Mapped[str] = mapped_column(String(32), index=True)
-    occurred_at: Mapped[datetime] = mapped_column(UTCDateTime())
     axles: Mapped[int] = mapped_column(Integer)
-    run_id: Mapped[int | None] = mapped_column(BigId, nullable=True, index=True)
-    side: Mapped[str | None] = mapped_column(String(16), nullable=True)
 
 
 class WheelMarking(Base):

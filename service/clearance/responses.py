@@ -32,9 +32,17 @@ class AuditOut(Answer):
 
 
 class DecisionOut(Answer):
-    verdict: str = Field(description="complete, incomplete or undetermined")
+    verdict: str = Field(description="complete, incomplete or undetermined (the rules' verdict)")
     reasons: list[str]
     auto: bool | None = Field(description="decided by the rules (true) or by a person")
+    action: str | None = Field(
+        default=None,
+        description="the latest action taken on the run: clear, keep_blocked, sweep, or"
+        " cleared_by_sweep (depot's own, when a sweep run proved the section empty); null"
+        " while nobody has acted",
+    )
+    actor: str | None = Field(default=None, description="who took that action")
+    acted_at: Instant | None = Field(default=None, description="when that action was recorded")
 
 
 class RunOut(Answer):
@@ -44,9 +52,27 @@ class RunOut(Answer):
     status: str = Field(description="running, arrived or conflict")
     from_station: str
     to_station: str
-    departed_at: Instant | None
-    arrived_at: Instant | None
-    evidence: dict[str, Any] | None
+    departed_at: Instant | None = Field(description="the interlocking's (device) time")
+    arrived_at: Instant | None = Field(description="the interlocking's (device) time")
+    sweep: bool = Field(
+        default=False,
+        description="a sweep run: the train sent through a section awaiting a sweep to prove"
+        " it empty (no conflict alarm for it)",
+    )
+    sweep_of: int | None = Field(default=None, description="for a sweep run: the run it sweeps")
+    cleared_by: int | None = Field(
+        default=None,
+        description="the sweep run whose complete arrival cleared this run (while it stays"
+        " complete)",
+    )
+    eot_unit: int | None = Field(
+        default=None, description="the EOT unit address armed on the train (train_departed)"
+    )
+    evidence: dict[str, Any] | None = Field(
+        description="the evidence as gathered for the latest decision; ``stale_devices``"
+        " lists the devices whose evidence is missing because the server had not heard from"
+        " them within DEPOT_HEARTBEAT_S when it received the departure or arrival"
+    )
     decision: DecisionOut | None
     overrides: list[AuditOut]
 

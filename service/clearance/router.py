@@ -88,7 +88,12 @@ def get_run(run_id: RunId, session: DbSession, _: CurrentReader) -> dict[str, An
 @router.post(
     "/runs/{run_id}/decision",
     response_model=DecisionAnswer,
-    responses={409: {"description": "not current or not arrived"}},
+    responses={
+        409: {
+            "description": "not the current run, not arrived, or already so decided"
+            " (nothing is recorded then)"
+        }
+    },
 )
 def decide_run(
     run_id: RunId, body: DecisionIn, session: DbSession, who: CurrentDispatcher

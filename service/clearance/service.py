@@ -72,11 +72,13 @@ def open_run(
     at: datetime,
     *,
     eot_unit: int | None = None,
+    received: datetime | None = None,
 ) -> dict[str, Any]:
     """``train_departed``: the train takes the block, or a conflict is recorded and raised.
 
     Into a section awaiting a sweep the train is the sweep run: no conflict, it holds the
-    section and remembers the run it sweeps.
+    section and remembers the run it sweeps. ``received`` is when the server received the
+    departure: the departure-side devices' liveness is judged then.
     """
     section = lock_section(session, section_id)
     run = Run(
@@ -92,6 +94,7 @@ def open_run(
         evidence={},
         eot_unit=eot_unit,
         sweep=False,
+        departure_received_at=received,
     )
     if departure_opens_sweep(section.state):
         run.sweep, run.sweep_of = True, section.current_run_id
@@ -144,9 +147,16 @@ def adopt_departure_evidence(session: Session, run: Run) -> int:
 
 
 def close_run(
-    session: Session, section_id: str, station: str, train: str, at: datetime
+    session: Session,
+    section_id: str,
+    station: str,
+    train: str,
+    at: datetime,
+    *,
+    received: datetime | None = None,
 ) -> dict[str, Any]:
-    """``train_arrived``: the current run arrives at the far station and is decided."""
+    """``train_arrived``: the current run arrives at the far station and is decided; the
+    arrival-side devices' liveness is judged at ``received``, when the server got the arrival."""
     section = lock_section(session, section_id)
     run = session.get(Run, section.current_run_id) if section.current_run_id else None
     if run is None or run.status != "running":
@@ -156,7 +166,7 @@ def close_run(
             "run": run.id,
             "warning": f"arrival reported at {station}, but run {run.id} goes to {run.to_station}",
         }
-    run.arrived_at = at
+    run.arrived_at, run.arrival_received_at = at, received
     run.status = "arrived"
     notes = (
         []
@@ -268,6 +278,29 @@ def attach(
     return {"run": run.id, "side": row.side}
 
 
+ACTION_WORDS = {"clear": "cleared", "keep_blocked": "kept blocked", "sweep": "sent to a sweep"}
+
+
+def check_action(run: Run, section: Section, action: str) -> None:
+    """Refuse (409) an action that cannot apply to the run now, naming why."""
+    if section.current_run_id != run.id:
+        raise Conflict(f"run {run.id} is not the current run of section {section.id}")
+    if run.status != "arrived":
+        raise Conflict(
+            f"run {run.id} has not arrived yet; the train is still in section {section.id}"
+        )
+    if section.state == ACTION_STATES[action]:
+        raise Conflict(
+            f"run {run.id} is already {ACTION_WORDS[action]}: section {section.id} is"
+            f" {section.state}; nothing was recorded"
+        )
+    if action == "sweep" and section.state not in SWEEP_FROM:
+        raise Conflict(
+            f"section {section.id} is {section.state}: a sweep is asked for a section in alarm,"
+            " review or blocked"
+        )
+
+
 def act(
     session: Session,
     run_id: int,
@@ -280,23 +313,18 @@ def act(
 ) -> AuditRecord | None:
     """A dispatcher's ``clear``, ``keep_blocked`` or ``sweep`` on the section's current, arrived
     run. ``sweep`` only where nothing proves the section empty (alarm, review, blocked); a
-    ``clear`` of a section awaiting its sweep is audited as a force-clear."""
+    ``clear`` of a section awaiting its sweep is audited as a force-clear.
+
+    The one way to act on a run: the API and the review form both call it. An action that
+    asks for the state the section is already in (a second ``clear``, a double click) is
+    refused (409) before anything is written, so the audit holds each decision once.
+    """
     run = session.get(Run, run_id)
     if run is None:
         raise NotFound(f"run {run_id} does not exist")
     section = lock_section(session, run.section)
-    if section.current_run_id != run.id:
-        raise Conflict(f"run {run_id} is not the current run of section {section.id}")
-    if run.status != "arrived":
-        raise Conflict(
-            f"run {run_id} has not arrived yet; the train is still in section {section.id}"
-        )
+    check_action(run, section, action)
     before = section.state
-    if action == "sweep" and before not in SWEEP_FROM:
-        raise Conflict(
-            f"section {section.id} is {before}: a sweep is asked for a section in alarm,"
-            " review or blocked"
-        )
     gathered = gather(session, run, section)
     _set_state(section, ACTION_STATES[action], at)
     run.auto = False

@@ -12,8 +12,8 @@ from core.settings import get_settings
 from ingest.handlers import Derivation
 from ingest.models import Snapshot
 from ingest.snapshots import load_bgr, stored_image
-from service.clearance import service
 from service.clearance.evidence import run_at, side_of
+from service.clearance.handlers import attach_evidence, evidence_row
 from tail_check.profile import CameraProfile
 
 
@@ -41,12 +41,9 @@ def _departure_reference(d: Derivation, run_id: int | None) -> Snapshot | None:
 
 def tail_snapshot(d: Derivation) -> dict[str, Any]:
     event = d.event
-    row = Snapshot(
-        id=d.raw.id,
-        device_id=d.device.id,
-        station=d.device.station,
-        section=event.section,
-        occurred_at=event.occurred_at,
+    row = evidence_row(
+        Snapshot,
+        d,
         sha256=event.image_sha256,
         content_type=event.content_type,
         width=event.width,
@@ -74,6 +71,5 @@ def tail_snapshot(d: Derivation) -> dict[str, Any]:
         float(detection["score"]),
         detection,
     )
-    d.session.add(row)
-    attached = service.attach(d.session, row, event.section, d.device.station, event.occurred_at)
+    attached = attach_evidence(d, row)
     return {"snapshot": row.id, "verdict": row.verdict, "score": row.score, **attached}

@@ -9,13 +9,15 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from core.models import Section
+from core.schemas import format_optional_instant
 from service.clearance.models import AuditRecord, Run
 
 QUEUE_STATES = ("alarm", "review", "awaiting_confirmation", "blocked")
 
 
 def _iso(value: datetime | None) -> str | None:
-    return None if value is None else value.isoformat().replace("+00:00", "Z")
+    # One way to write an instant (milliseconds at most): the screen shows these strings too.
+    return format_optional_instant(value)
 
 
 def audit_out(record: AuditRecord) -> dict[str, Any]:
@@ -58,9 +60,17 @@ def run_out(session: Session, run: Run) -> dict[str, Any]:
             "verdict": run.verdict or "undetermined",
             "reasons": run.reasons,
             "auto": run.auto,
+            **acted(overrides[-1] if overrides else None),
         },
         "overrides": [audit_out(r) for r in overrides],
     }
+
+
+def acted(record: AuditRecord | None) -> dict[str, Any]:
+    """The latest action on the run (a person's, or depot's own for a sweep): what, who, when."""
+    if record is None:
+        return {"action": None, "actor": None, "acted_at": None}
+    return {"action": record.action, "actor": record.actor, "acted_at": _iso(record.recorded_at)}
 
 
 def section_out(session: Session, section: Section) -> dict[str, Any]:

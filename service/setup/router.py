@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 from fastapi import APIRouter
 from sqlalchemy import select
 
 from core.auth import Admin, CurrentReader
-from core.database import DbSession
+from core.database import DbSession, utcnow
 from core.models import Car, Device, Station
 from service.setup import service
 from service.setup.schemas import (
@@ -57,19 +57,21 @@ def create_section(body: SectionIn, session: DbSession, _: Admin) -> dict[str, A
 @router.post("/devices", status_code=201, response_model=DeviceCreated)
 def create_device(body: DeviceIn, session: DbSession, _: Admin) -> Any:
     device, key = service.create_device(session, body)
-    return DeviceCreated(
-        id=device.id, station=device.station, section=device.section, kind=device.kind, key=key
-    )
+    return DeviceCreated(**service.device_view(device, utcnow()), key=key)
 
 
 @router.get("/devices", response_model=list[DeviceOut])
 def list_devices(session: DbSession, _: CurrentReader) -> Any:
-    return session.scalars(select(Device).order_by(Device.id)).all()
+    now = utcnow()
+    return [
+        service.device_view(d, now) for d in session.scalars(select(Device).order_by(Device.id))
+    ]
 
 
 @router.get("/devices/{device_id}", response_model=DeviceOut)
 def get_device(device_id: str, session: DbSession, _: CurrentReader) -> Any:
-    return service.get_or_404(session, Device, device_id, "device")
+    device = cast(Device, service.get_or_404(session, Device, device_id, "device"))
+    return service.device_view(device, utcnow())
 
 
 @router.post("/cars", status_code=201, response_model=CarOut)

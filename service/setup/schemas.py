@@ -55,8 +55,16 @@ class DeviceOut(BaseModel):
     station: str
     section: str | None
     kind: str
-    last_seen_at: Instant | None = None
-    stale: bool | None = None
+    last_seen_at: Instant | None = Field(
+        default=None,
+        description="when the server last received anything from the device (its receive"
+        " time, not the device's clock; kept to within 5 s)",
+    )
+    stale: bool | None = Field(
+        default=None,
+        description="nothing received from the device within DEPOT_HEARTBEAT_S (its evidence"
+        " counts missing); null once the device is decommissioned",
+    )
 
 
 class DeviceCreated(DeviceOut):

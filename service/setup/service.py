@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+from datetime import datetime
+from typing import Any
+
 from sqlalchemy import or_, select
 from sqlalchemy.orm import Session
 
 from core.auth import hash_secret, new_secret
 from core.errors import Conflict, NotFound, Unprocessable
 from core.models import Car, Device, Section, Station
+from ingest.liveness import is_stale
 from service.setup.credentials import add_user
 from service.setup.schemas import CarIn, DeviceIn, SectionIn, StationIn
 
@@ -104,3 +108,16 @@ def section_devices(session: Session, section: Section, station: str) -> list[De
             .order_by(Device.id)
         )
     )
+
+
+def device_view(device: Device, now: datetime) -> dict[str, Any]:
+    """A device as the API shows it; ``stale`` by the one heartbeat rule at server time ``now``
+    (``ingest.liveness.is_stale``: null once decommissioned)."""
+    return {
+        "id": device.id,
+        "station": device.station,
+        "section": device.section,
+        "kind": device.kind,
+        "last_seen_at": device.last_seen_at,
+        "stale": is_stale(device, now),
+    }

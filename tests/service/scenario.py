@@ -11,6 +11,7 @@ from fastapi.testclient import TestClient
 
 from tail_check.synth import render_snapshot
 from tests.conftest import ADMIN
+from tests.service.clock import ServerClock
 
 T0 = datetime(2026, 11, 23, 10, 0, tzinfo=UTC)
 
@@ -33,9 +34,18 @@ class Line:
     client: TestClient
     keys: dict[str, dict[str, str]]
     serial: int = 0
+    # With a clock, each event reaches the server at its device time, or at ``received``.
+    clock: ServerClock | None = None
 
-    def post(self, device: str, kind: str, at: datetime, **fields: Any) -> dict[str, Any]:
+    def _arrives(self, at: datetime, received: datetime | None) -> None:
+        if self.clock is not None:
+            self.clock.set(received or at)
+
+    def post(
+        self, device: str, kind: str, at: datetime, received: datetime | None = None, **fields: Any
+    ) -> dict[str, Any]:
         self.serial += 1
+        self._arrives(at, received)
         body = {
             "event_id": f"{device}-{self.serial}",
             "occurred_at": iso(at),
@@ -52,8 +62,11 @@ class Line:
             if device not in except_:
                 self.post(device, "heartbeat", at)
 
-    def snapshot(self, device: str, at: datetime, data: bytes) -> dict[str, Any]:
+    def snapshot(
+        self, device: str, at: datetime, data: bytes, received: datetime | None = None
+    ) -> dict[str, Any]:
         self.serial += 1
+        self._arrives(at, received)
         form = {"event_id": f"{device}-{self.serial}", "occurred_at": iso(at), "section": "AB"}
         response = self.client.post(
             "/api/v1/snapshots",

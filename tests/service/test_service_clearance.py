@@ -10,6 +10,7 @@ from sqlalchemy.orm import Session
 
 from service.setup.service import create_user
 from tests.conftest import ADMIN
+from tests.service.clock import ServerClock, server_clock  # noqa: F401 (fixture)
 from tests.service.linekit import build_line
 from tests.service.scenario import T0, Line, jpeg
 
@@ -149,7 +150,9 @@ def test_late_proof_of_loss_turns_free_into_alarm(line: Line) -> None:
     assert section["state"] == "alarm" and section["run"]["decision"]["verdict"] == "incomplete"
 
 
-def test_stale_reader_counts_missing(line: Line) -> None:
+def test_stale_reader_counts_missing(client: TestClient, server_clock: ServerClock) -> None:  # noqa: F811
+    # Silence is judged by receive times: each event reaches the server at its device time.
+    line = Line(client, build_line(client), clock=server_clock)
     line.heartbeat_all(T0 - timedelta(seconds=20))
     line.depart()
     line.heartbeat_all(ARRIVE - timedelta(seconds=20), except_=("B-ir",))
