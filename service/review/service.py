@@ -4,14 +4,14 @@ actions that still make sense on it, and the alerts the page sounds."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from datetime import datetime, timedelta
+from datetime import datetime
 from typing import Any
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from core.models import Device, Section
-from core.settings import get_settings
+from core.models import Section
+from ingest import liveness
 from service.clearance.models import Run
 from service.clearance.rules import SWEEP_FROM
 from service.clearance.service import ACTION_STATES
@@ -66,21 +66,18 @@ class Screen:
 
 
 def stale_devices(session: Session, now: datetime) -> list[dict[str, Any]]:
-    limit = timedelta(seconds=get_settings().heartbeat_s)
-    out = []
-    for device in session.scalars(select(Device).order_by(Device.id)):
-        if device.kind in ("marking_station", "test_bench", "onboard_unit"):
-            continue
-        if device.last_seen_at is None or now - device.last_seen_at > limit:
-            out.append(
-                {
-                    "id": device.id,
-                    "kind": device.kind,
-                    "station": device.station,
-                    "last_seen_at": device.last_seen_at,
-                }
-            )
-    return out
+    """The devices serving a section that are stale by the one liveness rule
+    (:func:`ingest.liveness.stale_devices`: server receive times, decommissioned never)."""
+    return [
+        {
+            "id": device.id,
+            "kind": device.kind,
+            "station": device.station,
+            "last_seen_at": device.last_seen_at,
+        }
+        for device in liveness.stale_devices(session, now)
+        if device.kind not in ("marking_station", "test_bench", "onboard_unit")
+    ]
 
 
 def sensible_actions(section: dict[str, Any] | None, run: dict[str, Any] | None) -> list[str]:

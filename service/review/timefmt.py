@@ -1,32 +1,21 @@
 """One time format for the screens: the dispatcher's time zone, seconds, the zone shown.
 
-Local to the review screen until a shared formatter exists (``DEPOT_TIME_ZONE``, default UTC);
-the lead unifies it with the server side's.
+The zone rule is :func:`core.timefmt.local` (``DEPOT_TIME_ZONE``); this module only adds what
+templates need: strings from JSON answers, an empty text for "no time", durations with days.
 """
 
 from __future__ import annotations
 
-import os
 from datetime import UTC, datetime
-from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
-from core.settings import get_settings
-
-
-def zone() -> ZoneInfo:
-    """The dispatcher's zone: the setting ``time_zone`` when it exists, else ``DEPOT_TIME_ZONE``."""
-    name = str(getattr(get_settings(), "time_zone", "") or os.environ.get("DEPOT_TIME_ZONE", ""))
-    try:
-        return ZoneInfo(name or "UTC")
-    except (ZoneInfoNotFoundError, ValueError):
-        return ZoneInfo("UTC")
+from core.timefmt import local
 
 
 def _local(value: datetime | str) -> datetime:
     at = datetime.fromisoformat(value) if isinstance(value, str) else value
     if at.tzinfo is None:  # the database keeps UTC
         at = at.replace(tzinfo=UTC)
-    return at.astimezone(zone()).replace(microsecond=0)
+    return local(at)
 
 
 def when(value: datetime | str | None) -> str:

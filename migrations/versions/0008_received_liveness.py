@@ -1,7 +1,7 @@
 """Liveness from the server's receive times (issue 17).
 
-Revision ID: night_backend_0007
-Revises: 0003_transport
+Revision ID: 0008_received_liveness
+Revises: 0007_review_sessions
 Create Date: 2026-12-02
 
 - ``devices.last_seen_at`` now means when the server last received anything from the device;
@@ -22,8 +22,8 @@ from collections.abc import Sequence
 import sqlalchemy as sa
 from alembic import op
 
-revision: str = "night_backend_0007"
-down_revision: str | None = "0003_transport"
+revision: str = "0008_received_liveness"
+down_revision: str | None = "0007_review_sessions"
 branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
 
