@@ -87,3 +87,19 @@ def test_user_lifecycle_and_device_commands(
     assert capsys.readouterr().err.startswith("depot: user 'nobody' does not exist")
     assert main(["device", "key", "nope"]) == 2
     assert "device 'nope' does not exist" in capsys.readouterr().err
+
+
+def test_user_add_refuses_names_the_api_refuses(
+    cli_data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Found by the independent trial: the CLI stored names that the API answers 422 to."""
+    assert main(["migrate"]) == 0
+    capsys.readouterr()
+    for bad in ("olena petrenko", "x" * 33, "ölena"):
+        assert main(["user", "add", bad, "--role", "dispatcher"]) == 2, bad
+        err = capsys.readouterr().err
+        assert err.startswith("depot: ") and "name" in err and "letters" in err, err
+    assert main(["device", "key", "bad id!"]) == 2
+    assert "device id" in capsys.readouterr().err
+    assert main(["user", "list"]) == 0
+    assert "olena" not in capsys.readouterr().out
