@@ -7,6 +7,7 @@ from typing import Any
 
 from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
+from uvicorn.middleware.proxy_headers import ProxyHeadersMiddleware
 
 from core.errors import install_error_handlers
 from core.settings import get_settings
@@ -145,6 +146,9 @@ def create_app() -> FastAPI:
         redoc_url=None,
     )
     install_docs(app)
+    if settings.trusted_proxy_list:
+        # The one place proxy headers are read (`depot serve` turns uvicorn's own off).
+        app.add_middleware(ProxyHeadersMiddleware, trusted_hosts=settings.trusted_proxy_list)
     install_error_handlers(app)
     app.include_router(health_router)
     app.include_router(setup_router, prefix=API)

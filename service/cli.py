@@ -31,6 +31,8 @@ def _serve(args: argparse.Namespace) -> int:
         port=args.port or settings.port,
         workers=args.workers,
         log_level="info",
+        # The app reads X-Forwarded-* itself, from DEPOT_TRUSTED_PROXIES only.
+        proxy_headers=False,
     )
     return 0
 
