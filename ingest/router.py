@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import time
 from typing import Any
 
 from fastapi import APIRouter, Request
@@ -12,9 +13,11 @@ from pydantic import ValidationError
 from sqlalchemy.orm import Session
 from starlette.datastructures import UploadFile
 
+from core import metrics
 from core.auth import CurrentDevicePrincipal
 from core.database import DbSession
 from core.errors import (
+    DepotError,
     PayloadTooLarge,
     Unprocessable,
     UnsupportedMediaType,
@@ -88,6 +91,7 @@ async def post_events(
     request: Request, session: DbSession, principal: CurrentDevicePrincipal
 ) -> JSONResponse:
     """Accept one event, or ``{"events": [...]}`` with at most 1000 events (each stands alone)."""
+    started = time.perf_counter()  # metrics: decision latency
     settings = get_settings()
     content_type = request.headers.get("content-type", "")
     if not content_type.split(";")[0].strip().lower().endswith("json"):
@@ -107,8 +111,14 @@ async def post_events(
                 ],
             ) from None
         results = await run_in_threadpool(service.accept_batch, session, device, batch.events)
+        metrics.batch_answered(batch.events, results)
         return JSONResponse({"results": results}, status_code=200)
-    status, result = await _single(session, device, payload, large=len(body) > INLINE_BYTES)
+    try:
+        status, result = await _single(session, device, payload, large=len(body) > INLINE_BYTES)
+    except DepotError as exc:
+        metrics.event_answered(payload, exc.status, started)
+        raise
+    metrics.event_answered(payload, status, started)
     return JSONResponse(result, status_code=status)
 
 

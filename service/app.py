@@ -21,6 +21,7 @@ from service.fleet.review import router as fleet_review_router
 from service.fleet.router import router as fleet_router
 from service.fleet.schedule import lifespan as fleet_lifespan
 from service.health import router as health_router
+from service.metrics import router as metrics_router
 from service.review.router import router as review_router
 from service.setup.credentials_router import router as credentials_router
 from service.setup.router import router as setup_router
@@ -151,6 +152,7 @@ def create_app() -> FastAPI:
         app.add_middleware(ProxyHeadersMiddleware, trusted_hosts=settings.trusted_proxy_list)
     install_error_handlers(app)
     app.include_router(health_router)
+    app.include_router(metrics_router)
     app.include_router(setup_router, prefix=API)
     app.include_router(credentials_router, prefix=API)
     app.include_router(ingest_router, prefix=API)
