@@ -6,6 +6,7 @@ import argparse
 import importlib
 import pkgutil
 import sys
+import warnings
 from collections.abc import Sequence
 from datetime import datetime
 
@@ -135,7 +136,11 @@ def _replay(_: argparse.Namespace) -> int:
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from service.demo import load_demo
+    with warnings.catch_warnings():
+        # Starlette's note on its test client's transport (the demo posts through it):
+        # nothing a person running the demo can act on.
+        warnings.filterwarnings("ignore", message="Using `httpx` with `starlette.testclient`")
+        from service.demo import load_demo
 
     return load_demo(force=args.force)
 

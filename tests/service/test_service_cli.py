@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import os
+import re
+import subprocess
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -103,3 +106,16 @@ def test_user_add_refuses_names_the_api_refuses(
     assert "device id" in capsys.readouterr().err
     assert main(["user", "list"]) == 0
     assert "olena" not in capsys.readouterr().out
+
+
+def test_demo_prints_a_summary_not_every_request(cli_data_dir: Path) -> None:
+    """Found by trying `make run`: the demo printed ~690 client log lines and a warning."""
+    env = {**os.environ, "DEPOT_DATA_DIR": str(cli_data_dir)}
+    cli = [sys.executable, "-m", "service.cli"]
+    assert subprocess.run([*cli, "migrate"], env=env, capture_output=True).returncode == 0
+    done = subprocess.run([*cli, "demo"], env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    lines = [line for line in (done.stdout + done.stderr).splitlines() if line.strip()]
+    assert len(lines) <= 3, lines[:10]
+    assert "HTTP Request" not in done.stderr and "Warning" not in done.stderr, done.stderr
+    assert re.search(r"demo: \d{3,} requests through the API, all answered 2xx", done.stdout)
