@@ -114,9 +114,8 @@ class SmearMeasurement:
 
 @dataclass(frozen=True)
 class StripeQuality:
-    """When a frame shows a stripe pattern at all. Measured: real stripes' edges
-    (``render_stripes`` 0–60 m/s, noise σ 20 or none) lie 0.04–0.41 px rms off their lines,
-    edges followed on photos without stripes 1.4–24 px; noise or a gradient give ≤ 1 edge."""
+    """When a frame shows stripes at all. Measured: rendered stripes' edges (0–60 m/s, noise
+    σ 20 or none) 0.04–0.41 px rms off their lines; photos 1.4–24 px; noise ≤ 1 edge."""
 
     max_residual_px: float = 1.0  # rms distance of the edge points from their lines, pixels
     min_tracks: int = 3  # stripe edges that agree on the slope, at least
