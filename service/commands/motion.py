@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from motion import braking, optical
-from service.commands._common import fail
+from service.commands._common import DepotParser, fail
 from service.commands._motion_reports import render_histogram_png, tables
 
 __all__ = ["build_parser", "main", "register", "render_histogram_png"]
@@ -396,7 +396,7 @@ def _register_braking(sub: Any) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="depot", description="depot motion commands")
+    parser = DepotParser(prog="depot", description="depot motion commands")
     register(parser.add_subparsers(dest="command", required=True))
     return parser
 
