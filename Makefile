@@ -2,24 +2,33 @@
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV ?= .venv
 PY := $(VENV)/bin/python
+# `make run` installs what the service needs; `make test` (lint, bench, ...) adds the dev tools.
+RUN_STAMP := $(VENV)/.installed-run
 STAMP := $(VENV)/.installed-stamp
+PIP := $(PY) -m pip install --quiet --progress-bar off --disable-pip-version-check
 PURE := identification tail_check maintenance motion
 TYPED := core ingest service transports $(PURE) bench
 
 .PHONY: run test lint bench soak install clean format
 
+$(RUN_STAMP): pyproject.toml
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	@echo "installing depot into $(VENV) (service dependencies only)"
+	@$(PIP) -e .
+	@touch $(RUN_STAMP)
+
 $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[dev]'
-	@touch $(STAMP)
+	@echo "installing depot and its development tools into $(VENV)"
+	@$(PIP) -e '.[dev]'
+	@touch $(STAMP) $(RUN_STAMP)
 
 install: $(STAMP)
 
-run: $(STAMP)
-	$(VENV)/bin/depot migrate
-	$(VENV)/bin/depot demo
-	$(VENV)/bin/depot serve
+run: $(RUN_STAMP)
+	@$(VENV)/bin/depot migrate
+	@$(VENV)/bin/depot demo
+	@$(VENV)/bin/depot serve
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ipaddress
 from functools import lru_cache
 from pathlib import Path
 from typing import Literal
@@ -47,6 +48,12 @@ class Settings(BaseSettings):
     group_commit_max: int = Field(default=64, ge=1, le=1000)
     host: str = "127.0.0.1"
     port: int = 8000
+    # Reverse proxies whose X-Forwarded-For / X-Forwarded-Proto are believed (comma-separated
+    # addresses or CIDR networks, "*" any, "" none): behind them the client address in the
+    # logs is the real one and a request that came in over TLS is https (Secure cookies).
+    trusted_proxies: str = "127.0.0.1"
+    # /metrics (Prometheus text): answered to the admin token, or to this token when set.
+    metrics_token: str | None = Field(default=None, min_length=24)
     # Transports (docs/DEPLOYMENT.md): the MQTT bridge and the JetStream consumer.
     mqtt_url: str = "mqtt://127.0.0.1:1883"
     mqtt_prefix: str = Field(default="depot/v1", pattern=r"^[^#+$/]([^#+]*[^#+/])?$")
@@ -71,6 +78,24 @@ class Settings(BaseSettings):
                 f"DEPOT_TIME_ZONE {name!r} is not an IANA time zone; use e.g. UTC or Europe/Kyiv"
             ) from None
         return name
+
+    @field_validator("trusted_proxies")
+    @classmethod
+    def _proxy_addresses(cls, value: str) -> str:
+        for item in (part.strip() for part in value.split(",")):
+            if item and item != "*":
+                try:
+                    ipaddress.ip_network(item, strict=False)
+                except ValueError:
+                    raise ValueError(
+                        f"DEPOT_TRUSTED_PROXIES: {item!r} is not an address or network"
+                        " (e.g. 127.0.0.1,172.16.0.0/12)"
+                    ) from None
+        return value
+
+    @property
+    def trusted_proxy_list(self) -> list[str]:
+        return [part.strip() for part in self.trusted_proxies.split(",") if part.strip()]
 
     @model_validator(mode="after")
     def _refuse_unsafe_production(self) -> Settings:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import time
 from typing import Any
 
 from fastapi import APIRouter, Request
@@ -11,9 +12,11 @@ from fastapi.responses import JSONResponse
 from sqlalchemy.orm import Session
 from starlette.datastructures import UploadFile
 
+from core import metrics
 from core.auth import CurrentDevicePrincipal
 from core.database import DbSession
 from core.errors import (
+    DepotError,
     PayloadTooLarge,
     Unprocessable,
     UnsupportedMediaType,
@@ -87,6 +90,7 @@ async def post_events(
     request: Request, session: DbSession, principal: CurrentDevicePrincipal
 ) -> JSONResponse:
     """Accept one event, or ``{"events": [...]}`` with at most 1000 events (each stands alone)."""
+    started = time.perf_counter()  # metrics: decision latency
     settings = get_settings()
     content_type = request.headers.get("content-type", "")
     if not content_type.split(";")[0].strip().lower().endswith("json"):
@@ -98,8 +102,14 @@ async def post_events(
     events = batch_events(payload)
     if events is not None:
         results = await run_in_threadpool(service.accept_batch, session, device, events)
+        metrics.batch_answered(events, results)
         return JSONResponse({"results": results}, status_code=200)
-    status, result = await _single(session, device, payload, large=len(body) > INLINE_BYTES)
+    try:
+        status, result = await _single(session, device, payload, large=len(body) > INLINE_BYTES)
+    except DepotError as exc:
+        metrics.event_answered(payload, exc.status, started)
+        raise
+    metrics.event_answered(payload, status, started)
     return JSONResponse(result, status_code=status)
 
 

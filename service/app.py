@@ -7,18 +7,21 @@ from typing import Any
 
 from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
+from uvicorn.middleware.proxy_headers import ProxyHeadersMiddleware
 
 from core.errors import install_error_handlers
 from core.settings import get_settings
 from ingest.event_log import router as event_log_router
 from ingest.router import router as ingest_router
-from ingest.schemas import EVENT_ADAPTER, EventBatch
+from ingest.schemas import EVENT_ADAPTER, EventBatch, TailSnapshot
 from service import features
 from service.clearance.router import router as clearance_router
+from service.docs import install_docs
 from service.fleet.review import router as fleet_review_router
 from service.fleet.router import router as fleet_router
 from service.fleet.schedule import lifespan as fleet_lifespan
 from service.health import router as health_router
+from service.metrics import router as metrics_router
 from service.review.router import router as review_router
 from service.setup.credentials_router import router as credentials_router
 from service.setup.router import router as setup_router
@@ -43,6 +46,8 @@ def _openapi(app: FastAPI) -> dict[str, Any]:
     components.update(batch_schema.pop("$defs", {}))
     components["EventBatch"] = batch_schema
     components["Problem"] = PROBLEM_SCHEMA
+    components["SnapshotUpload"] = _snapshot_upload_schema()
+    _document_snapshot_upload(schema["paths"].get(f"{API}/snapshots", {}).get("post"))
     for path, operations in schema["paths"].items():
         if path.startswith(API):
             for operation in operations.values():
@@ -80,6 +85,43 @@ PROBLEMS = {
 }
 
 
+def _snapshot_upload_schema() -> dict[str, Any]:
+    """The multipart form of ``POST /snapshots``: the file ``image`` and the event's fields.
+
+    The route reads the form by hand (to bound its size before parsing), so FastAPI cannot
+    see it; the field rules come from the stored event's model, so they cannot drift.
+    """
+    fields = TailSnapshot.model_json_schema()["properties"]
+    return {
+        "type": "object",
+        "required": ["image", "event_id", "occurred_at", "section"],
+        "properties": {
+            "image": {
+                "type": "string",
+                "format": "binary",
+                "description": "JPEG or PNG, at most DEPOT_MAX_IMAGE_BYTES and "
+                "DEPOT_MAX_IMAGE_PIXELS",
+            },
+            **{name: fields[name] for name in ("event_id", "occurred_at", "section")},
+        },
+    }
+
+
+def _document_snapshot_upload(operation: dict[str, Any] | None) -> None:
+    if operation is None:
+        return
+    schema = {"$ref": "#/components/schemas/SnapshotUpload"}
+    operation["requestBody"] = {
+        "required": True,
+        "content": {
+            "multipart/form-data": {
+                "schema": schema,
+                "encoding": {"image": {"contentType": "image/jpeg, image/png"}},
+            }
+        },
+    }
+
+
 def _document_problems(operation: dict[str, Any]) -> None:
     """Every error is ``application/problem+json``; say so for each operation."""
     content = {"application/problem+json": {"schema": {"$ref": "#/components/schemas/Problem"}}}
@@ -101,9 +143,16 @@ def create_app() -> FastAPI:
         description="Railway depot and operations service: station devices, block clearance, "
         "car identification, predictive maintenance, motion.",
         lifespan=fleet_lifespan,
+        docs_url=None,  # service/docs.py serves both pages without internet
+        redoc_url=None,
     )
+    install_docs(app)
+    if settings.trusted_proxy_list:
+        # The one place proxy headers are read (`depot serve` turns uvicorn's own off).
+        app.add_middleware(ProxyHeadersMiddleware, trusted_hosts=settings.trusted_proxy_list)
     install_error_handlers(app)
     app.include_router(health_router)
+    app.include_router(metrics_router)
     app.include_router(setup_router, prefix=API)
     app.include_router(credentials_router, prefix=API)
     app.include_router(ingest_router, prefix=API)

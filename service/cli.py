@@ -6,6 +6,7 @@ import argparse
 import importlib
 import pkgutil
 import sys
+import warnings
 from collections.abc import Sequence
 from datetime import datetime
 
@@ -15,7 +16,7 @@ from core.database import get_sessionmaker, utcnow
 from core.errors import DepotError
 from core.settings import get_settings
 from service import commands
-from service.commands._common import fail
+from service.commands._common import DepotParser, fail
 
 
 def _serve(args: argparse.Namespace) -> int:
@@ -31,6 +32,8 @@ def _serve(args: argparse.Namespace) -> int:
         port=args.port or settings.port,
         workers=args.workers,
         log_level="info",
+        # The app reads X-Forwarded-* itself, from DEPOT_TRUSTED_PROXIES only.
+        proxy_headers=False,
     )
     return 0
 
@@ -133,20 +136,22 @@ def _replay(_: argparse.Namespace) -> int:
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from service.demo import load_demo
+    with warnings.catch_warnings():
+        # Starlette's note on its test client's transport (the demo posts through it):
+        # nothing a person running the demo can act on.
+        warnings.filterwarnings("ignore", message="Using `httpx` with `starlette.testclient`")
+        from service.demo import load_demo
 
     return load_demo(force=args.force)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="depot", description="Railway depot and operations service."
-    )
+    parser = DepotParser(prog="depot", description="Railway depot and operations service.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     serve = sub.add_parser("serve", help="serve the HTTP API and the review screen")
-    serve.add_argument("--host")
-    serve.add_argument("--port", type=int)
-    serve.add_argument("--workers", type=int, default=1)
+    serve.add_argument("--host", help="address to listen on (default: DEPOT_HOST, 127.0.0.1)")
+    serve.add_argument("--port", type=int, help="TCP port to listen on (default: DEPOT_PORT, 8000)")
+    serve.add_argument("--workers", type=int, default=1, help="worker processes")
     serve.add_argument("--migrate", action="store_true", help="migrate the database first")
     serve.set_defaults(func=_serve)
     sub.add_parser(
@@ -156,23 +161,31 @@ def build_parser() -> argparse.ArgumentParser:
         dest="user_command", metavar="ACTION"
     )
     add = user.add_parser("add", help="add a person; prints their token once")
-    add.add_argument("name")
-    add.add_argument("--role", required=True, choices=("dispatcher", "engineer"))
+    add.add_argument("name", help="the person's name: letters, digits, '_', '.', '-' (≤ 32)")
     add.add_argument(
-        "--expires-in-days", type=float, default=None, help="token lifetime (default: no expiry)"
+        "--role", required=True, choices=("dispatcher", "engineer"), help="what they may do"
+    )
+    add.add_argument(
+        "--expires-in-days",
+        type=float,
+        default=None,
+        help="token lifetime, days (default: no expiry)",
     )
     add.set_defaults(func=_user_add)
     user.add_parser("list", help="list people, their roles and token state").set_defaults(
         func=_user_list
     )
     rotate = user.add_parser("rotate", help="a new token for NAME (prints it once)")
-    rotate.add_argument("name")
+    rotate.add_argument("name", help="the person whose token is replaced")
     rotate.add_argument(
-        "--expires-in-days", type=float, default=None, help="token lifetime (default: no expiry)"
+        "--expires-in-days",
+        type=float,
+        default=None,
+        help="new token lifetime, days (default: the old token's expiry)",
     )
     rotate.set_defaults(func=_user_rotate)
     revoke = user.add_parser("revoke", help="NAME's token stops working at once")
-    revoke.add_argument("name")
+    revoke.add_argument("name", help="the person whose token stops working")
     revoke.set_defaults(func=_user_revoke)
     device = sub.add_parser("device", help="rotate a device key or decommission a device")
     device_sub = device.add_subparsers(dest="device_command", metavar="ACTION")
@@ -181,7 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
         ("decommission", _device_decommission, "refuse DEVICE's events from now on"),
     ):
         parser_ = device_sub.add_parser(action, help=text)
-        parser_.add_argument("device")
+        parser_.add_argument("device", help="the device id, as registered")
         parser_.set_defaults(func=func)
     demo = sub.add_parser("demo", help="load the demo line and a simulated day of traffic")
     demo.add_argument("--force", action="store_true", help="load even if data is already there")

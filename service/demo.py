@@ -10,11 +10,14 @@ arrival, and an arrival the camera missed, cleared by the next train sweeping th
 
 from __future__ import annotations
 
+import logging
+from collections import Counter
 from dataclasses import dataclass, field
 from datetime import UTC, datetime, timedelta
 from typing import Any
 
 import cv2
+import httpx
 import numpy as np
 from fastapi.testclient import TestClient
 from sqlalchemy import select
@@ -296,7 +299,16 @@ def load_demo(*, force: bool = False, fleet: bool = True) -> int:
         if session.scalar(select(Station.id).limit(1)) is not None and not force:
             print("demo: the database already holds a line; nothing loaded (--force adds anyway)")
             return 0
-    with TestClient(create_app()) as client:
+    answers: Counter[int] = Counter()
+
+    def count(response: httpx.Response) -> None:
+        answers[response.status_code // 100 * 100] += 1
+
+    app = create_app()
+    # One summary line instead of a log line per request (create_app logs at INFO).
+    logging.getLogger("httpx").setLevel(logging.WARNING)
+    with TestClient(app) as client:
+        client.event_hooks["response"].append(count)
         line = DemoLine(client)
         line.build()
         now = datetime.now(UTC).replace(microsecond=0)
@@ -306,6 +318,12 @@ def load_demo(*, force: bool = False, fleet: bool = True) -> int:
         states = {
             s["id"]: s["state"] for s in client.get("/api/v1/sections", headers=line.admin).json()
         }
+    total = sum(answers.values())
+    refused = {f"{k // 100}xx": n for k, n in sorted(answers.items()) if k != 200}
+    print(
+        f"demo: {total} requests through the API, "
+        + (f"answered {refused} besides 2xx" if refused else "all answered 2xx")
+    )
     print(
         f"demo: loaded {len(STATIONS)} stations, {len(line.keys)} devices,"
         f" {len(FLEET)} cars, 8 runs (one EOT-equipped, one sweep);"

@@ -96,7 +96,9 @@ def register(subparsers: Any) -> None:
     fc = subparsers.add_parser(
         "forecast", help="forecast every car from its stored measurements (progress on stderr)"
     )
-    fc.add_argument("--method", choices=WEIGHTS_METHODS, default="prediction")
+    fc.add_argument(
+        "--method", choices=WEIGHTS_METHODS, default="prediction", help="quality-index weights"
+    )
     fc.add_argument("--horizon", type=_positive, default=30, help="forecast steps (tests)")
     fc.add_argument("--order", type=_positive, default=2, help="AR order of the index")
     fc.set_defaults(func=_forecast)

@@ -185,9 +185,7 @@ def _tail_train(args: argparse.Namespace) -> int:
     from tail_check.dataset import Generator
     from tail_check.pipeline.train import TrainParams, train
 
-    generators: tuple[Generator, ...] = tuple(
-        g for g in args.generators.upper() if g in ("A", "B")
-    )
+    generators: tuple[Generator, ...] = tuple(g for g in args.generators.upper() if g in ("A", "B"))
     if not generators or len(generators) != len(args.generators):
         return fail(f"--generators must be A, B or AB, got {args.generators!r}")
     out = Path(args.out)

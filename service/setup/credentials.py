@@ -18,9 +18,10 @@ from core.auth import device_cache, hash_secret, new_secret
 from core.database import utcnow
 from core.errors import Conflict, NotFound, Unprocessable
 from core.models import ROLES, CredentialChange, Device, User
+from service.setup.names import DEVICE_ID, USER_NAME
 
 
-def _record(
+def record_change(
     session: Session, actor: str, action: str, kind: str, subject: str, detail: str = ""
 ) -> None:
     session.add(
@@ -49,6 +50,7 @@ def add_user(
     session: Session, name: str, role: str, *, actor: str, expires_in_days: float | None = None
 ) -> tuple[User, str]:
     """A new person with a role; returns the row and the token (shown once)."""
+    USER_NAME.check(name)  # the API's rule, for the CLI too
     if role not in ROLES:
         raise Unprocessable(f"role must be one of {', '.join(ROLES)}")
     existing = session.scalar(select(User).where(User.name == name))
@@ -60,7 +62,7 @@ def add_user(
         name=name, role=role, token_hash=hash_secret(token), expires_at=_expiry(expires_in_days)
     )
     session.add(user)
-    _record(session, actor, "user_added", "user", name, f"role {role}")
+    record_change(session, actor, "user_added", "user", name, f"role {role}")
     session.flush()
     return user, token
 
@@ -80,7 +82,7 @@ def rotate_user(
     user.token_hash = hash_secret(token)
     if expires_in_days is not None:  # else the new token keeps the old one's expiry
         user.expires_at = _expiry(expires_in_days)
-    _record(session, actor, "user_rotated", "user", name)
+    record_change(session, actor, "user_rotated", "user", name)
     session.flush()
     return user, token
 
@@ -93,13 +95,13 @@ def revoke_user(session: Session, name: str, *, actor: str) -> User:
     user.revoked_at = utcnow()
     # The hash is replaced too, so even a cached copy of the old token matches nothing.
     user.token_hash = hash_secret(new_secret())
-    _record(session, actor, "user_revoked", "user", name)
+    record_change(session, actor, "user_revoked", "user", name)
     session.flush()
     return user
 
 
 def _device(session: Session, device_id: str) -> Device:
-    device = session.get(Device, device_id)
+    device = session.get(Device, DEVICE_ID.check(device_id))
     if device is None:
         raise NotFound(f"device {device_id!r} does not exist")
     if device.decommissioned_at is not None:
@@ -112,7 +114,7 @@ def rotate_device_key(session: Session, device_id: str, *, actor: str) -> tuple[
     device = _device(session, device_id)
     key = new_secret()
     device.key_hash = hash_secret(key)
-    _record(session, actor, "device_key_rotated", "device", device_id)
+    record_change(session, actor, "device_key_rotated", "device", device_id)
     session.flush()
     device_cache().invalidate(device_id)  # this worker at once; the others within the TTL
     return device, key
@@ -123,7 +125,7 @@ def decommission_device(session: Session, device_id: str, *, actor: str) -> Devi
     device = _device(session, device_id)
     device.decommissioned_at = utcnow()
     device.key_hash = hash_secret(new_secret())
-    _record(session, actor, "device_decommissioned", "device", device_id)
+    record_change(session, actor, "device_decommissioned", "device", device_id)
     session.flush()
     device_cache().invalidate(device_id)  # this worker at once; the others within the TTL
     return device

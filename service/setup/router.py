@@ -55,8 +55,8 @@ def create_section(body: SectionIn, session: DbSession, _: Admin) -> dict[str, A
 
 
 @router.post("/devices", status_code=201, response_model=DeviceCreated)
-def create_device(body: DeviceIn, session: DbSession, _: Admin) -> Any:
-    device, key = service.create_device(session, body)
+def create_device(body: DeviceIn, session: DbSession, who: Admin) -> Any:
+    device, key = service.create_device(session, body, actor=who.name)
     return DeviceCreated(**service.device_view(device, utcnow()), key=key)
 
 

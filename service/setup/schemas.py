@@ -8,12 +8,14 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from core.models import DEVICE_KINDS
 from core.schemas import Instant, StrictModel
+from service.setup.names import DEVICE_ID, IDENTIFIER, NAME_PATTERN
 
+# One rule (names.py) for the API and for the services the CLI calls.
 Identifier = Annotated[
-    str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+    str, Field(min_length=1, max_length=IDENTIFIER.max_length, pattern=NAME_PATTERN)
 ]
 DeviceIdentifier = Annotated[
-    str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+    str, Field(min_length=1, max_length=DEVICE_ID.max_length, pattern=NAME_PATTERN)
 ]
 DeviceKind = Literal[DEVICE_KINDS]  # type: ignore[valid-type]
 

@@ -12,7 +12,7 @@ from core.auth import hash_secret, new_secret
 from core.errors import Conflict, NotFound, Unprocessable
 from core.models import Car, Device, Section, Station
 from ingest.liveness import is_stale
-from service.setup.credentials import add_user
+from service.setup.credentials import add_user, record_change
 from service.setup.schemas import CarIn, DeviceIn, SectionIn, StationIn
 
 
@@ -50,7 +50,8 @@ def create_section(session: Session, data: SectionIn) -> Section:
     return section
 
 
-def create_device(session: Session, data: DeviceIn) -> tuple[Device, str]:
+def create_device(session: Session, data: DeviceIn, *, actor: str) -> tuple[Device, str]:
+    """Register a device; returns it and its key (shown once). The issued key is audited."""
     _ensure_new(session, Device, data.id, "device")
     if session.get(Station, data.station) is None:
         raise Unprocessable(f"station {data.station!r} does not exist; create it first")
@@ -72,6 +73,8 @@ def create_device(session: Session, data: DeviceIn) -> tuple[Device, str]:
         key_hash=hash_secret(key),
     )
     session.add(device)
+    where = f"station {data.station}" + (f", section {data.section}" if data.section else "")
+    record_change(session, actor, "device_registered", "device", data.id, f"{data.kind} at {where}")
     session.flush()
     return device, key
 

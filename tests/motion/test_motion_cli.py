@@ -171,3 +171,38 @@ def test_register_into_an_existing_parser() -> None:
     cmd.register(sub)
     args = parser.parse_args(["braking", "trials", "--p-max", "1e-4", "--beta", "0.99"])
     assert args.func(args) == 0
+
+
+REAL_FRAMES = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "real"
+
+
+def _scene_without_stripes(seed: int) -> object:
+    """A photo-like frame: blurred blobs and edges at every angle, no stripe pattern."""
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    img = np.full((720, 1280), 90, np.uint8)
+    for _ in range(60):
+        centre = (int(rng.integers(0, 1280)), int(rng.integers(0, 720)))
+        axes = (int(rng.integers(10, 200)), int(rng.integers(10, 200)))
+        cv2.ellipse(
+            img, centre, axes, float(rng.uniform(0, 180)), 0, 360, int(rng.integers(0, 256)), -1
+        )
+    return cv2.GaussianBlur(img, (0, 0), 2.0)
+
+
+def test_optical_speed_refuses_a_photo_without_stripes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Found by the trial: a photo with no stripes was answered '1.80 km/h ± 0.19'."""
+    images = [tmp_path / f"scene{seed}.png" for seed in (1, 2, 3)]
+    for seed, path in zip((1, 2, 3), images, strict=True):
+        assert cv2.imwrite(str(path), _scene_without_stripes(seed))
+    images += sorted((REAL_FRAMES / "railsem19_frames").glob("*.jpg"))[:6]  # real photos
+    for path in images:
+        argv = ["optical-speed", str(path), "--distance", "1", "--pixel-fov", "0.00094"]
+        rc = cmd.main([*argv, "--row-time", "1e-4"])
+        captured = capsys.readouterr()
+        assert rc == 2, f"{path.name}: answered {captured.out!r}"
+        assert captured.err.startswith("depot: no stripes found"), captured.err
+        assert "km/h" not in captured.out

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import os
+import re
+import subprocess
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -87,3 +90,32 @@ def test_user_lifecycle_and_device_commands(
     assert capsys.readouterr().err.startswith("depot: user 'nobody' does not exist")
     assert main(["device", "key", "nope"]) == 2
     assert "device 'nope' does not exist" in capsys.readouterr().err
+
+
+def test_user_add_refuses_names_the_api_refuses(
+    cli_data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Found by the independent trial: the CLI stored names that the API answers 422 to."""
+    assert main(["migrate"]) == 0
+    capsys.readouterr()
+    for bad in ("olena petrenko", "x" * 33, "ölena"):
+        assert main(["user", "add", bad, "--role", "dispatcher"]) == 2, bad
+        err = capsys.readouterr().err
+        assert err.startswith("depot: ") and "name" in err and "letters" in err, err
+    assert main(["device", "key", "bad id!"]) == 2
+    assert "device id" in capsys.readouterr().err
+    assert main(["user", "list"]) == 0
+    assert "olena" not in capsys.readouterr().out
+
+
+def test_demo_prints_a_summary_not_every_request(cli_data_dir: Path) -> None:
+    """Found by trying `make run`: the demo printed ~690 client log lines and a warning."""
+    env = {**os.environ, "DEPOT_DATA_DIR": str(cli_data_dir)}
+    cli = [sys.executable, "-m", "service.cli"]
+    assert subprocess.run([*cli, "migrate"], env=env, capture_output=True).returncode == 0
+    done = subprocess.run([*cli, "demo"], env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    lines = [line for line in (done.stdout + done.stderr).splitlines() if line.strip()]
+    assert len(lines) <= 3, lines[:10]
+    assert "HTTP Request" not in done.stderr and "Warning" not in done.stderr, done.stderr
+    assert re.search(r"demo: \d{3,} requests through the API, all answered 2xx", done.stdout)

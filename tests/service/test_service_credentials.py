@@ -107,7 +107,11 @@ def test_device_key_rotated_and_device_decommissioned(client: TestClient) -> Non
     assert client.post("/api/v1/devices/A-ac/key", headers=ADMIN).status_code == 409
     assert client.post("/api/v1/devices/nope/decommission", headers=ADMIN).status_code == 404
     changes = client.get("/api/v1/credential-changes?subject=A-ac", headers=ADMIN).json()
-    assert [c["action"] for c in changes] == ["device_decommissioned", "device_key_rotated"]
+    assert [c["action"] for c in changes] == [
+        "device_decommissioned",
+        "device_key_rotated",
+        "device_registered",
+    ]
 
 
 def test_rotation_keeps_the_expiry_unless_a_new_one_is_given(
@@ -122,3 +126,33 @@ def test_rotation_keeps_the_expiry_unless_a_new_one_is_given(
         "/api/v1/users/petro/rotate", json={"expires_in_days": 30}, headers=ADMIN
     ).json()
     assert longer["expires_at"] > added["expires_at"]
+
+
+def test_registering_a_device_is_audited(client: TestClient) -> None:
+    """Found by the independent trial: the key issued at registration left no audit record."""
+    build_line(client)
+    changes = client.get("/api/v1/credential-changes?subject=A-ac", headers=ADMIN).json()
+    assert [c["action"] for c in changes] == ["device_registered"]
+    assert changes[0]["actor"] == "admin" and changes[0]["subject_kind"] == "device"
+    assert "axle_counter" in changes[0]["detail"] and "station A" in changes[0]["detail"]
+    rotated = client.post("/api/v1/devices/A-ac/key", headers=ADMIN).json()["key"]
+    every = client.get("/api/v1/credential-changes?subject=A-ac", headers=ADMIN).json()
+    assert [c["action"] for c in every] == ["device_key_rotated", "device_registered"]
+    assert not any(rotated in str(c) for c in every)  # the secret itself is never recorded
+
+
+def test_one_name_rule_for_the_api_and_the_service(client: TestClient, session: Session) -> None:
+    """Found by the independent trial: `depot user add` stored names the API refuses."""
+    from core.errors import Unprocessable
+    from service.setup.credentials import add_user
+
+    for bad in ("olena petrenko", "-x", "", "a" * 33, "ölena", "x;drop"):
+        answer = client.post("/api/v1/users", json={"name": bad, "role": "engineer"}, headers=ADMIN)
+        assert answer.status_code == 422, bad
+        try:
+            add_user(session, bad, "engineer", actor="test")
+        except Unprocessable as exc:
+            assert "name" in exc.detail
+        else:
+            raise AssertionError(f"the service accepted {bad!r}")
+    assert add_user(session, "olena.p-2", "engineer", actor="test")[0].name == "olena.p-2"

@@ -1,0 +1,76 @@
+"""``GET /metrics``: Prometheus text format, for the admin token or ``DEPOT_METRICS_TOKEN``.
+
+This worker's counters (``core/metrics.py``: events by kind and outcome, decision latency)
+and gauges read from the database at scrape time, the same from every worker: devices stale
+past their heartbeat, sections by state and the review queue (runs waiting for a person).
+"""
+
+from __future__ import annotations
+
+import hmac
+from datetime import timedelta
+
+from fastapi import APIRouter, Request
+from fastapi.responses import PlainTextResponse
+from sqlalchemy import func, or_, select
+from sqlalchemy.orm import Session
+
+from core import metrics
+from core.database import DbSession, utcnow
+from core.errors import Unauthorized
+from core.models import Device, Section
+from core.settings import get_settings
+from service.clearance.views import QUEUE_STATES
+
+router = APIRouter(tags=["operations"])
+PROMETHEUS_TEXT = "text/plain; version=0.0.4; charset=utf-8"
+# Devices that report now and then by nature (marking, bench, on-board), never "stale";
+# the review screen's list of stale devices leaves out the same kinds.
+OCCASIONAL_KINDS = ("marking_station", "test_bench", "onboard_unit")
+
+
+def _authorised(request: Request) -> None:
+    settings = get_settings()
+    given = request.headers.get("authorization", "")
+    scheme, _, token = given.partition(" ")
+    accepted = [settings.admin_token, *([settings.metrics_token] if settings.metrics_token else [])]
+    if scheme.lower() != "bearer" or not any(
+        hmac.compare_digest(token.encode(), secret.encode()) for secret in accepted
+    ):
+        raise Unauthorized("send the admin token or DEPOT_METRICS_TOKEN as a bearer token")
+
+
+def _gauge(name: str, help_text: str, samples: dict[str, float], label: str = "") -> list[str]:
+    lines = [f"# HELP {name} {help_text}", f"# TYPE {name} gauge"]
+    for value_label, value in sorted(samples.items()):
+        where = f'{{{label}="{value_label}"}}' if label else ""
+        lines.append(f"{name}{where} {value:g}")
+    return lines
+
+
+def database_gauges(session: Session) -> list[str]:
+    """Stale devices, sections by state, the review queue: one query each."""
+    limit = utcnow() - timedelta(seconds=get_settings().heartbeat_s)
+    stale = session.scalar(
+        select(func.count())
+        .select_from(Device)
+        .where(Device.decommissioned_at.is_(None), Device.kind.not_in(OCCASIONAL_KINDS))
+        .where(or_(Device.last_seen_at.is_(None), Device.last_seen_at < limit))
+    )
+    states = {
+        state: float(n)
+        for state, n in session.execute(select(Section.state, func.count()).group_by(Section.state))
+    }
+    queue = sum(n for state, n in states.items() if state in QUEUE_STATES)
+    return [
+        *_gauge("depot_devices_stale", "devices silent past DEPOT_HEARTBEAT_S", {"": stale or 0}),
+        *_gauge("depot_sections", "block sections by state", states, "state"),
+        *_gauge("depot_review_queue", "sections waiting for a dispatcher", {"": queue}),
+    ]
+
+
+@router.get("/metrics", response_class=PlainTextResponse, responses={401: {}})
+def prometheus_metrics(request: Request, session: DbSession) -> PlainTextResponse:
+    """Prometheus text exposition (version 0.0.4)."""
+    _authorised(request)
+    return PlainTextResponse(metrics.render(database_gauges(session)), media_type=PROMETHEUS_TEXT)

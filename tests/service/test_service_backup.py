@@ -1,0 +1,98 @@
+"""Backup and restore (docs/OPERATIONS.md): deploy/restore-test.sh backs up a PostgreSQL
+database with its image store, restores both elsewhere and compares every row and image."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from fastapi.testclient import TestClient
+from sqlalchemy import create_engine, text
+
+from core.database import make_engine
+from core.settings import get_settings
+from service.migrate import upgrade
+from tests.conftest import ADMIN, POSTGRES_URL, app_on
+from tests.service.linekit import build_line, event
+from tests.service.test_service_snapshots import encoded, upload
+
+DEPLOY = Path(__file__).resolve().parents[2] / "deploy"
+SOURCE_DB, TARGET_DB = "depot_ops_backup_src", "depot_ops_backup_dst"
+pytestmark = pytest.mark.skipif(
+    not POSTGRES_URL or shutil.which("pg_dump") is None,
+    reason="needs DEPOT_TEST_POSTGRES_URL and the PostgreSQL client tools",
+)
+
+
+def _server_url() -> str:
+    assert POSTGRES_URL
+    return POSTGRES_URL.rsplit("/", 1)[0]
+
+
+@pytest.fixture
+def source(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[dict[str, str]]:
+    """A migrated database with a line, events, a person and a snapshot image."""
+    admin = create_engine(f"{_server_url()}/postgres", isolation_level="AUTOCOMMIT")
+    with admin.connect() as connection:
+        connection.execute(text(f'DROP DATABASE IF EXISTS "{SOURCE_DB}" WITH (FORCE)'))
+        connection.execute(text(f'CREATE DATABASE "{SOURCE_DB}"'))
+    admin.dispose()
+    url = f"{_server_url()}/{SOURCE_DB}"
+    upgrade(url)
+    monkeypatch.setenv("DEPOT_DATA_DIR", str(tmp_path / "data"))
+    get_settings.cache_clear()
+    engine = make_engine(url)
+    with TestClient(app_on(engine)) as client:
+        keys = build_line(client)
+        body = event("bk-ac-1", "axle_count", section="AB", axles=16)
+        assert client.post("/api/v1/events", json=body, headers=keys["A-ac"]).status_code == 201
+        shot = upload(client, keys["A-cam"], encoded(".jpg"), event_id="bk-cam-1")
+        assert getattr(shot, "status_code", None) == 201
+        person = {"name": "olena", "role": "dispatcher"}
+        assert client.post("/api/v1/users", json=person, headers=ADMIN).status_code == 201
+    engine.dispose()
+    get_settings.cache_clear()
+    yield {
+        **os.environ,
+        "DEPOT_DATABASE_URL": url,
+        "DEPOT_DATA_DIR": str(tmp_path / "data"),
+        "DEPOT_RESTORE_TEST_DB": TARGET_DB,
+    }
+    admin = create_engine(f"{_server_url()}/postgres", isolation_level="AUTOCOMMIT")
+    with admin.connect() as connection:
+        connection.execute(text(f'DROP DATABASE IF EXISTS "{SOURCE_DB}" WITH (FORCE)'))
+    admin.dispose()
+
+
+def test_a_backup_restores_every_row_and_image(source: dict[str, str]) -> None:
+    done = subprocess.run(
+        [DEPLOY / "restore-test.sh"], env=source, capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    summary = done.stdout.strip().splitlines()[-1]
+    assert summary.startswith("restore verified:"), done.stdout
+    images = int(summary.split(" images")[0].rsplit(" ", 1)[-1])
+    assert images == 1
+    assert int(summary.split(" rows")[0].rsplit(" ", 1)[-1]) > 20
+
+
+def test_a_damaged_backup_is_refused(source: dict[str, str], tmp_path: Path) -> None:
+    made = subprocess.run(
+        [DEPLOY / "backup.sh", tmp_path / "backups"], env=source, capture_output=True, text=True
+    )
+    assert made.returncode == 0, made.stderr
+    backup = Path(made.stdout.strip())
+    with (backup / "images.tar").open("r+b") as archive:
+        archive.seek(600)
+        archive.write(b"\xff" * 16)
+    target = {**source, "DEPOT_DATA_DIR": str(tmp_path / "restored")}
+    refused = subprocess.run(
+        [DEPLOY / "restore.sh", backup], env=target, capture_output=True, text=True
+    )
+    assert refused.returncode == 2
+    assert "fails its checksums" in refused.stderr
+    assert not (tmp_path / "restored").exists()  # nothing was half-restored
