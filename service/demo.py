@@ -19,7 +19,6 @@ from typing import Any
 import cv2
 import httpx
 import numpy as np
-from fastapi.testclient import TestClient
 from sqlalchemy import select
 
 from core.database import get_sessionmaker
@@ -27,6 +26,7 @@ from core.models import Station
 from core.settings import get_settings
 from identification.simulate import ir_pulses_passage, wheel_mark_passage
 from service.fleet.demo import load_fleet_history
+from service.inprocess import TestClient
 from tail_check.synth import render_snapshot
 
 STATIONS = (("A", "Anan'iv"), ("B", "Birzula"), ("C", "Podilsk"))

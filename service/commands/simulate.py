@@ -20,13 +20,15 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import UTC, datetime, timedelta
-from typing import cast
+from typing import TYPE_CHECKING, cast
 
 import httpx
 import numpy as np
-from fastapi.testclient import TestClient
 
 from core.settings import get_settings
+
+if TYPE_CHECKING:
+    from service.inprocess import TestClient
 from service.commands._common import fail
 from service.demo import END_KINDS, FLEET, SECTIONS, STATIONS, DemoLine, Trip
 
@@ -213,6 +215,7 @@ def _when_answering(line: DemoLine, wait_s: float) -> str:
 def _client(url: str | None) -> Iterator[httpx.Client]:
     if url is None:
         from service.app import create_app
+        from service.inprocess import TestClient
 
         with TestClient(create_app()) as client:
             yield client
@@ -244,7 +247,7 @@ def _run(args: argparse.Namespace, schedule: Schedule, stop: threading.Event) ->
     trains = 0
     try:
         with _client(args.url) as client:
-            line = DemoLine(cast(TestClient, client))
+            line = DemoLine(cast("TestClient", client))
             line.serial = int(time.time() * 1000)  # event ids never reuse the demo day's
             try:
                 _say(_when_answering(line, args.wait))
@@ -275,12 +278,38 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     p.add_argument(
         "--url", help="a running server, e.g. http://127.0.0.1:8000 (default: in-process)"
     )
-    p.add_argument("--train-every", type=float, default=Schedule.train_every_s, metavar="S")
-    p.add_argument("--transit", type=float, default=Schedule.transit_s, metavar="S")
-    p.add_argument("--heartbeat-every", type=float, default=Schedule.heartbeat_every_s, metavar="S")
-    p.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds")
+    p.add_argument(
+        "--train-every",
+        type=float,
+        default=Schedule.train_every_s,
+        metavar="S",
+        help="seconds between trains sent into a free section",
+    )
+    p.add_argument(
+        "--transit",
+        type=float,
+        default=Schedule.transit_s,
+        metavar="S",
+        help="seconds from departure to arrival",
+    )
+    p.add_argument(
+        "--heartbeat-every",
+        type=float,
+        default=Schedule.heartbeat_every_s,
+        metavar="S",
+        help="seconds between each device's heartbeats",
+    )
+    p.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        metavar="S",
+        help="stop after S seconds (default: run until stopped)",
+    )
     p.add_argument(
         "--wait", type=float, default=30.0, metavar="S", help="wait S seconds for the server"
     )
-    p.add_argument("--seed", type=int, default=None, help="outcomes repeatable with a seed")
+    p.add_argument(
+        "--seed", type=int, default=None, help="outcomes repeatable with a seed (default: random)"
+    )
     p.set_defaults(func=_simulate)

@@ -10,9 +10,8 @@ from __future__ import annotations
 from datetime import datetime, timedelta
 from typing import Any
 
-from fastapi.testclient import TestClient
-
 from maintenance.simulate import PARAMETERS, SimulatedFleet, simulate_fleet
+from service.inprocess import TestClient
 
 TESTS_PER_CAR = 100  # one bench test every TEST_INTERVAL: about seven months of history
 TEST_INTERVAL = timedelta(days=2)
