@@ -127,6 +127,10 @@ async def _single(
         event = await run_in_threadpool(service.validate_event, device, payload)
     else:
         event = service.validate_event(device, payload)
+    if session.in_transaction():
+        # The key look-up (cold cache, e.g. after a restart) holds a pooled connection; given
+        # back before waiting, else waiting requests can take every connection from the group.
+        await run_in_threadpool(session.close)
     result: tuple[int, dict[str, Any]] = await committer.submit(device, event, payload)
     return result
 
