@@ -23,6 +23,7 @@ from core.settings import get_settings
 from ingest import service
 from ingest.batches import batch_events
 from ingest.commit_queue import committer_for
+from ingest.device_auth import EventDevice
 from ingest.schemas import BatchResult, EventAck
 from ingest.snapshots import check_image, store_image
 
@@ -83,9 +84,7 @@ def _json(data: bytes) -> Any:
         422: {"description": "invalid event"},
     },
 )
-async def post_events(
-    request: Request, session: DbSession, principal: CurrentDevicePrincipal
-) -> JSONResponse:
+async def post_events(request: Request, session: DbSession, device: EventDevice) -> JSONResponse:
     """Accept one event, or ``{"events": [...]}`` with at most 1000 events (each stands alone)."""
     settings = get_settings()
     content_type = request.headers.get("content-type", "")
@@ -93,8 +92,6 @@ async def post_events(
         raise UnsupportedMediaType("send events as application/json")
     body = await _read_limited(request, settings.max_body_bytes)
     payload = _json(body)
-    device = principal.device
-    assert device is not None
     events = batch_events(payload)
     if events is not None:
         results = await run_in_threadpool(service.accept_batch, session, device, events)
