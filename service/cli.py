@@ -31,6 +31,9 @@ def _serve(args: argparse.Namespace) -> int:
         port=args.port or settings.port,
         workers=args.workers,
         log_level="info",
+        # uvicorn kills a worker that answers no health ping for this long; its default (5 s)
+        # is shorter than a worker's start on a busy 2-core host, which then never comes up.
+        timeout_worker_healthcheck=60,
     )
     return 0
 
