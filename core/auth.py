@@ -92,6 +92,14 @@ class DeviceKeyCache:
                 self._entries[digest] = (now, copy)
         return copy
 
+    def peek(self, key: str) -> Device | None:
+        """The cached device of ``key`` while its entry is fresh, without touching a database
+        (so an async caller can skip the thread a look-up needs); None means: look it up."""
+        entry = self._entries.get(hash_secret(key))
+        if entry is not None and self._clock() - entry[0] < self.ttl_s:
+            return entry[1]
+        return None
+
     def invalidate(self, device_id: str | None = None) -> None:
         """Forget one device (after its key changed) or every device."""
         with self._lock:

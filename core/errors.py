@@ -9,6 +9,7 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from sqlalchemy.exc import DataError, InterfaceError, OperationalError, PendingRollbackError
+from sqlalchemy.exc import TimeoutError as PoolTimeout
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 PROBLEM_JSON = "application/problem+json"
@@ -112,7 +113,8 @@ def install_error_handlers(app: FastAPI) -> None:
             headers={"Retry-After": "5"},
         )
 
-    for failure in (OperationalError, InterfaceError, PendingRollbackError):
+    # PoolTimeout: every connection of the worker's pool is busy; as good as unreachable.
+    for failure in (OperationalError, InterfaceError, PendingRollbackError, PoolTimeout):
         app.add_exception_handler(failure, _database_down)
 
     @app.exception_handler(DataError)

@@ -26,6 +26,7 @@ from core.settings import get_settings
 from ingest import service
 from ingest.batches import batch_events
 from ingest.commit_queue import committer_for
+from ingest.device_auth import EventDevice
 from ingest.schemas import BatchResult, EventAck
 from ingest.snapshots import check_image, store_image
 
@@ -86,9 +87,7 @@ def _json(data: bytes) -> Any:
         422: {"description": "invalid event"},
     },
 )
-async def post_events(
-    request: Request, session: DbSession, principal: CurrentDevicePrincipal
-) -> JSONResponse:
+async def post_events(request: Request, session: DbSession, device: EventDevice) -> JSONResponse:
     """Accept one event, or ``{"events": [...]}`` with at most 1000 events (each stands alone)."""
     started = time.perf_counter()  # metrics: decision latency
     settings = get_settings()
@@ -97,8 +96,6 @@ async def post_events(
         raise UnsupportedMediaType("send events as application/json")
     body = await _read_limited(request, settings.max_body_bytes)
     payload = _json(body)
-    device = principal.device
-    assert device is not None
     events = batch_events(payload)
     if events is not None:
         results = await run_in_threadpool(service.accept_batch, session, device, events)
@@ -137,6 +134,10 @@ async def _single(
         event = await run_in_threadpool(service.validate_event, device, payload)
     else:
         event = service.validate_event(device, payload)
+    if session.in_transaction():
+        # The key look-up (cold cache, e.g. after a restart) holds a pooled connection; given
+        # back before waiting, else waiting requests can take every connection from the group.
+        await run_in_threadpool(session.close)
     result: tuple[int, dict[str, Any]] = await committer.submit(device, event, payload)
     return result
 

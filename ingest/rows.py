@@ -21,17 +21,17 @@ from core.models import Device
 from ingest.models import RawEvent
 
 RAW: Table = RawEvent.__table__  # type: ignore[assignment]
-# A transport column is added by the MQTT/NATS bridges; rows carry it once it exists.
-HAS_TRANSPORT = "transport" in RAW.c
-COLUMNS = ("device_id", "event_id", "kind", "occurred_at", "received_at", "section")
+COLUMNS = ("device_id", "event_id", "kind", "occurred_at", "received_at", "section", "transport")
+# One statement of constant text for any number of rows: the arrays are bound as parameters.
 UNNEST_INSERT = text(
     "INSERT INTO raw_events (device_id, event_id, kind, occurred_at, received_at, section,"
-    " body, body_sha256, result)"
-    " SELECT d, e, k, o, r, s, CAST(b AS json), h, CAST(res AS json) FROM unnest("
+    " transport, body, body_sha256, result)"
+    " SELECT d, e, k, o, r, s, t, CAST(b AS json), h, CAST(res AS json) FROM unnest("
     " CAST(:device_id AS text[]), CAST(:event_id AS text[]), CAST(:kind AS text[]),"
     " CAST(:occurred_at AS timestamptz[]), CAST(:received_at AS timestamptz[]),"
-    " CAST(:section AS text[]), CAST(:body AS text[]), CAST(:body_sha256 AS text[]),"
-    " CAST(:result AS text[])) AS u(d, e, k, o, r, s, b, h, res)"
+    " CAST(:section AS text[]), CAST(:transport AS text[]), CAST(:body AS text[]),"
+    " CAST(:body_sha256 AS text[]), CAST(:result AS text[]))"
+    " AS u(d, e, k, o, r, s, t, b, h, res)"
     " ON CONFLICT (device_id, event_id) DO NOTHING RETURNING id, device_id, event_id"
 )
 
@@ -78,9 +78,8 @@ def raw_values(
         "body": body,
         "body_sha256": event_sha256(event),
         "result": answer or {},
+        "transport": transport,
     }
-    if HAS_TRANSPORT:
-        values["transport"] = transport
     return values
 
 
@@ -103,7 +102,7 @@ def insert_many(session: Session, rows: list[dict[str, Any]]) -> dict[tuple[str,
     """
     if not rows:
         return {}
-    if session.get_bind().dialect.name != "postgresql" or HAS_TRANSPORT:
+    if session.get_bind().dialect.name != "postgresql":
         statement = _insert(session).returning(RAW.c.id, RAW.c.device_id, RAW.c.event_id)
         return {(d, e): i for i, d, e in session.execute(statement, rows)}
     arrays: dict[str, list[Any]] = {c: [r[c] for r in rows] for c in COLUMNS}

@@ -34,6 +34,9 @@ def _serve(args: argparse.Namespace) -> int:
         log_level="info",
         # The app reads X-Forwarded-* itself, from DEPOT_TRUSTED_PROXIES only.
         proxy_headers=False,
+        # uvicorn kills a worker that answers no health ping for this long; its default (5 s)
+        # is shorter than a worker's start on a busy 2-core host, which then never comes up.
+        timeout_worker_healthcheck=60,
     )
     return 0
 

@@ -1,0 +1,130 @@
+"""A batch of one device's events: each item stands alone, the raw rows go in together."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from sqlalchemy.orm import Session
+
+from core.errors import Conflict, Forbidden, Unprocessable
+from core.models import Device
+from ingest.checks import check_device_may_send, check_section, parse_event
+from ingest.handlers import Derivation, derive
+from ingest.rows import as_raw, insert_many, raw_values, write_answers
+from ingest.store import answer_now, derive_new, duplicate
+
+
+def _rejected(event_id: Any, exc: Unprocessable | Conflict | Forbidden) -> dict[str, Any]:
+    error: dict[str, Any] = {"status": exc.status, "title": exc.title, "detail": exc.detail}
+    if exc.errors:
+        error["errors"] = exc.errors
+    return {
+        "event_id": event_id if isinstance(event_id, str) else None,
+        "status": "rejected",
+        "error": error,
+    }
+
+
+def _validated(
+    session: Session, device: Device, items: list[Any]
+) -> tuple[list[dict[str, Any] | None], list[tuple[int, Any, dict[str, Any]]]]:
+    """Validate every item; returns the per-item rejections and the accepted (index, event,
+    payload) triples. Nothing is written, so a rejection cannot disturb the others."""
+    results: list[dict[str, Any] | None] = [None] * len(items)
+    accepted: list[tuple[int, Any, dict[str, Any]]] = []
+    sections_ok: set[str | None] = set()
+    for index, item in enumerate(items):
+        try:
+            event = parse_event(item)
+            check_device_may_send(device, event.kind)
+            section = getattr(event, "section", None)
+            if section not in sections_ok:
+                check_section(session, device, section)
+                sections_ok.add(section)
+        except (Unprocessable, Forbidden) as exc:
+            results[index] = _rejected(
+                item.get("event_id") if isinstance(item, dict) else None, exc
+            )
+            continue
+        accepted.append((index, event, item))
+    return results, accepted
+
+
+def _stored_item(
+    session: Session, device: Device, event: Any, body: dict[str, Any], answers: list[Any]
+) -> dict[str, Any]:
+    """The batch item of an event stored before (a retry, or a reuse of its id)."""
+    try:
+        _, result = duplicate(session, device, event, body, answers)
+    except Conflict as exc:
+        return _rejected(event.event_id, exc)
+    return {"event_id": event.event_id, "status": "duplicate", "result": result}
+
+
+def accept_batch(
+    session: Session, device: Device, items: list[Any], *, transport: str = "http"
+) -> list[dict[str, Any]]:
+    """Each item stands alone: a rejected item leaves the others stored.
+
+    The new events' raw rows go in with one statement (``INSERT … SELECT FROM unnest`` on
+    PostgreSQL; the unique key still decides duplicates), then they are derived one by one in
+    the batch's order, and the derived answers are written with one executemany.
+    """
+    results, accepted = _validated(session, device, items)
+    first: dict[str, tuple[int, Any, dict[str, Any]]] = {}
+    repeats = []
+    for entry in accepted:
+        if entry[1].event_id in first:
+            repeats.append(entry)
+        else:
+            first[entry[1].event_id] = entry
+    rows = {
+        event.event_id: raw_values(
+            device, event, body, answer=answer_now(event), transport=transport
+        )
+        for _, event, body in first.values()
+    }
+    inserted = insert_many(session, list(rows.values()))
+    answers: list[dict[str, Any]] = []
+    for index, event, body in first.values():
+        raw_id = inserted.get((device.id, event.event_id))
+        if raw_id is None:
+            results[index] = _stored_item(session, device, event, body, answers)
+            continue
+        values = rows[event.event_id]
+        if values["result"]:
+            derive(Derivation(session, as_raw(raw_id, values), event, device))
+            result = values["result"]
+        else:
+            row = derive_new(session, device, event, raw_id, values)
+            answers.append(row)
+            result = row["result"]
+        results[index] = {"event_id": event.event_id, "status": "created", "result": result}
+    for index, event, body in repeats:
+        results[index] = _stored_item(session, device, event, body, answers)
+    write_answers(session, answers)
+    return [r for r in results if r is not None]
+
+
+def ingest_events(
+    target: Session | Callable[[], Session],
+    device: Device,
+    payloads: list[Any],
+    *,
+    transport: str = "http",
+) -> list[dict[str, Any]]:
+    """Store and derive ``payloads`` of ``device`` (see the module docstring); one result per
+    payload, in order. With a session factory, returns after the commit."""
+    if isinstance(target, Session):
+        return accept_batch(target, device, payloads, transport=transport)
+    session = target()
+    try:
+        results = accept_batch(session, device, payloads, transport=transport)
+        session.commit()
+        return results
+    except BaseException:
+        session.rollback()
+        raise
+    finally:
+        session.close()
