@@ -34,7 +34,7 @@ from core.errors import Conflict, DepotError, Forbidden, Unprocessable, validati
 from core.models import Device, Section
 from core.schemas import format_instant
 from core.settings import get_settings
-from ingest.handlers import Derivation, derive, has_handlers
+from ingest.handlers import Derivation, check_derivable, derive, has_handlers
 from ingest.liveness import restore_pending, snapshot_pending
 from ingest.models import RawEvent
 from ingest.rows import (
@@ -222,6 +222,7 @@ def accept_event(
     event = parse_event(payload)
     check_device_may_send(device, event.kind)
     check_section(session, device, getattr(event, "section", None))
+    check_derivable(session, event)
     # Stored exactly as received; the canonical hash makes key order irrelevant for retries.
     return store_event(session, device, event, payload, transport=transport)
 
@@ -238,6 +239,7 @@ def store_validated(
 ) -> tuple[int, dict[str, Any]]:
     """:func:`store_event` after the section check (which needs the database)."""
     check_section(session, device, getattr(event, "section", None))
+    check_derivable(session, event)
     return store_event(session, device, event, body)
 
 
@@ -264,6 +266,7 @@ def store_group(
         device, event, body = items[index]
         try:
             check_section(session, device, getattr(event, "section", None))
+            check_derivable(session, event)
         except DepotError as exc:
             outcomes[index] = exc
             continue
@@ -322,6 +325,7 @@ def _validated(
             if section not in sections_ok:
                 check_section(session, device, section)
                 sections_ok.add(section)
+            check_derivable(session, event)
         except (Unprocessable, Forbidden) as exc:
             results[index] = _rejected(
                 item.get("event_id") if isinstance(item, dict) else None, exc
