@@ -10,7 +10,7 @@ from sqlalchemy.orm import Session
 from core.errors import Conflict, Forbidden, Unprocessable
 from core.models import Device
 from ingest.checks import check_device_may_send, check_section, parse_event
-from ingest.handlers import Derivation, derive
+from ingest.handlers import Derivation, check_derivable, derive
 from ingest.rows import as_raw, insert_many, raw_values, write_answers
 from ingest.store import answer_now, derive_new, duplicate
 
@@ -42,6 +42,7 @@ def _validated(
             if section not in sections_ok:
                 check_section(session, device, section)
                 sections_ok.add(section)
+            check_derivable(session, event)
         except (Unprocessable, Forbidden) as exc:
             results[index] = _rejected(
                 item.get("event_id") if isinstance(item, dict) else None, exc

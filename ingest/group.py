@@ -9,7 +9,7 @@ from sqlalchemy.orm import Session
 from core.errors import DepotError
 from core.models import Device
 from ingest.checks import check_section
-from ingest.handlers import Derivation, derive
+from ingest.handlers import Derivation, check_derivable, derive
 from ingest.rows import as_raw, insert_many, raw_values, write_answers
 from ingest.store import answer_now, duplicate
 
@@ -37,6 +37,7 @@ def store_group(
         device, event, body = items[index]
         try:
             check_section(session, device, getattr(event, "section", None))
+            check_derivable(session, event)
         except DepotError as exc:
             outcomes[index] = exc
             continue

@@ -33,11 +33,22 @@ class Derivation:
 
 Handler = Callable[[Derivation], dict[str, Any] | None]
 HandlerTable = Mapping[type[EventBase], Sequence[Handler]]
+# A feature's checks of an event against stored state (e.g. registered parameters), run
+# before anything is stored: they raise core.errors.Unprocessable (422) with the reason.
+Validator = Callable[[Session, Any], None]
+ValidatorTable = Mapping[type[EventBase], Sequence[Validator]]
 # The installed table, indexed by kind (filled by `install`; empty means liveness only).
 HANDLERS: dict[str, tuple[Handler, ...]] = {}
+VALIDATORS: dict[str, tuple[Validator, ...]] = {}
 
 
-def install(table: HandlerTable) -> None:
+def check_derivable(session: Session, event: Any) -> None:
+    """Run the features' validators of the event's kind (raise 422 before it is stored)."""
+    for validate in VALIDATORS.get(event.kind, ()):
+        validate(session, event)
+
+
+def install(table: HandlerTable, validators: ValidatorTable | None = None) -> None:
     """Install the application's handler table; every event model must have an entry.
 
     An entry may be empty (the event only proves the device alive). Raises ValueError when a
@@ -49,6 +60,8 @@ def install(table: HandlerTable) -> None:
         raise ValueError(f"handler table: missing kinds {missing}, unknown models {unknown}")
     HANDLERS.clear()
     HANDLERS.update({kind_of(model): tuple(handlers) for model, handlers in table.items()})
+    VALIDATORS.clear()
+    VALIDATORS.update({kind_of(model): tuple(v) for model, v in (validators or {}).items()})
 
 
 def has_handlers(kind: str) -> bool:

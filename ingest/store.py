@@ -17,7 +17,7 @@ from sqlalchemy.orm import Session
 from core.errors import Conflict
 from core.models import Device
 from ingest.checks import check_device_may_send, check_section, parse_event
-from ingest.handlers import Derivation, derive, has_handlers
+from ingest.handlers import Derivation, check_derivable, derive, has_handlers
 from ingest.liveness import restore_pending, snapshot_pending
 from ingest.models import RawEvent
 from ingest.rows import (
@@ -123,6 +123,7 @@ def accept_event(
     event = parse_event(payload)
     check_device_may_send(device, event.kind)
     check_section(session, device, getattr(event, "section", None))
+    check_derivable(session, event)
     # Stored exactly as received; the canonical hash makes key order irrelevant for retries.
     return store_event(session, device, event, payload, transport=transport)
 
@@ -132,4 +133,5 @@ def store_validated(
 ) -> tuple[int, dict[str, Any]]:
     """:func:`store_event` after the section check (which needs the database)."""
     check_section(session, device, getattr(event, "section", None))
+    check_derivable(session, event)
     return store_event(session, device, event, body)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from ingest import handlers as ingest_handlers
 from ingest import schemas as ev
-from ingest.handlers import HandlerTable
+from ingest.handlers import HandlerTable, ValidatorTable
 from service.clearance import handlers as clearance
 from service.clearance import tail
 from service.fleet import handlers as fleet
@@ -32,6 +32,12 @@ HANDLER_TABLE: HandlerTable = {
 }
 
 
+# Checks against stored state that refuse an event (422) before anything of it is stored.
+VALIDATOR_TABLE: ValidatorTable = {
+    ev.Measurement: (fleet.measurement_values,),
+}
+
+
 def install() -> None:
-    """Install the table into ingest (idempotent); called by the app factory and the CLI."""
-    ingest_handlers.install(HANDLER_TABLE)
+    """Install the tables into ingest (idempotent); called by the app factory and the CLI."""
+    ingest_handlers.install(HANDLER_TABLE, VALIDATOR_TABLE)

@@ -4,10 +4,18 @@ from __future__ import annotations
 
 from typing import Any
 
+from sqlalchemy.orm import Session
+
 from core.models import Car
 from ingest.handlers import Derivation
-from service.fleet.rules import registered, value_problems
+from service.fleet.rules import refuse_implausible, registered, value_problems
 from service.fleet.service import record_measurements
+
+
+def measurement_values(session: Session, event: Any) -> None:
+    """The validator of ``measurement`` events: every value names a registered parameter and
+    is plausible, as for the API and the CSV import; else 422 and nothing is stored."""
+    refuse_implausible(registered(session), event.values)
 
 
 def measurement(d: Derivation) -> dict[str, Any]:
@@ -21,8 +29,8 @@ def measurement(d: Derivation) -> dict[str, Any]:
         }
     refused = value_problems(registered(d.session), d.event.values)
     if refused:
-        # The raw event is kept (replay applies it once the parameters are registered); the
-        # device learns why nothing was stored.
+        # Only on replay of an event stored before the values were checked at the door (or
+        # before a parameter's range was narrowed): the raw event is kept, nothing derived.
         return {"car": car_id, "measurements": 0, "refused": refused}
     stored = record_measurements(
         d.session,

@@ -176,7 +176,9 @@ def histories(session: Session, names: Sequence[str]) -> Generator[CarHistory, N
     if not columns:
         return
     if session.get_bind().dialect.name == "postgresql":
-        cars = stream_postgresql(session, sorted(columns))
+        layouts = select(MeasurementLayout.id, MeasurementLayout.names)
+        widths = {i: len(n) for i, n in session.execute(layouts) if i in columns}
+        cars = stream_postgresql(session, widths)
     else:
         cars = _stream_rows(session, sorted(columns))
     for car_id, blocks in cars:

@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import csv
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
 from datetime import datetime
-from typing import Any, TextIO
+from typing import TextIO
 
 from sqlalchemy import insert, select
 from sqlalchemy.orm import Session
@@ -22,6 +23,7 @@ from sqlalchemy.orm import Session
 from core.errors import Unprocessable
 from core.models import Car
 from ingest.schemas import EARLIEST, LATEST
+from service.fleet.csv_checks import decimal_comma_problems
 from service.fleet.models import Measurement, Parameter
 from service.fleet.rules import value_problems
 from service.fleet.service import measured_values, measurement_row
@@ -61,14 +63,13 @@ def _number(text: str, line: int, column: str, errors: list[str]) -> float | Non
     return value
 
 
-def _shape_problem(row: dict[Any, Any], line: int, width: int) -> str | None:
-    extra = row.get(None)  # DictReader puts fields beyond the header under the key None
-    if extra:
+def _shape_problem(fields: list[str], line: int, width: int) -> str | None:
+    if len(fields) > width:
         return (
-            f"line {line}: {width + len(extra)} fields for {width} columns — a decimal comma?"
+            f"line {line}: {len(fields)} fields for {width} columns — a decimal comma?"
             " write 3.1 with a point, or quote the field"
         )
-    if any(value is None for key, value in row.items() if key is not None):
+    if len(fields) < width:
         return f"line {line}: fewer fields than the {width} columns of the header"
     return None
 
@@ -78,54 +79,101 @@ def _unknown_columns(params: list[str], parameters: Mapping[str, Parameter]) -> 
     return [f"column {name}: {why}" for name, why in value_problems(parameters, unknown).items()]
 
 
-def parse_tests(stream: TextIO, parameters: Mapping[str, Parameter]) -> list[Test]:
-    """The tests in a CSV file, checked against the registered ``parameters``; raises
-    Unprocessable listing the bad lines and columns (nothing is imported then)."""
-    reader = csv.DictReader(stream)
-    header = [name.strip() for name in (reader.fieldnames or [])]
+def _header(reader: Iterator[list[str]]) -> list[str]:
+    header = [name.strip() for name in next(reader, [])]
+    if len(header) == 1 and ";" in header[0]:
+        raise Unprocessable(
+            "the header is separated by ';' (the CSV of a decimal-comma locale); export it"
+            f" with ',' between fields and '.' in numbers, like {EXAMPLE}"
+        )
     missing = [key for key in KEYS if key not in header]
     if missing:
         raise Unprocessable(
             f"the CSV lacks the column(s) {', '.join(missing)}; the first line must be a header"
             f" like {EXAMPLE} (or car,taken_at,parameter,value)"
         )
-    reader.fieldnames = header
+    return header
+
+
+@dataclass
+class _Parsed:
+    """What the rows held: each test's values with the line of every value, and the errors."""
+
+    errors: list[str] = field(default_factory=list)
+    tests: dict[tuple[str, datetime], dict[str, tuple[float, int]]] = field(default_factory=dict)
+
+    def add(self, car: str, at: datetime, values: Mapping[str, float], line: int) -> None:
+        """Merge a row's values into its test; a value contradicting an earlier row's is an
+        error naming both lines (the same value again, or other parameters, merge)."""
+        test = self.tests.setdefault((car, at), {})
+        for name, value in values.items():
+            before = test.get(name)
+            if before is not None and before[0] != value:
+                self.errors.append(
+                    f"lines {before[1]} and {line}: car {car} at {at.isoformat()} has"
+                    f" {name} = {before[0]:g} and {value:g}; keep the right one"
+                )
+                continue
+            test.setdefault(name, (value, line))
+
+
+def parse_tests(stream: TextIO, parameters: Mapping[str, Parameter]) -> list[Test]:
+    """The tests in a CSV file, checked against the registered ``parameters``; raises
+    Unprocessable listing the bad lines and columns (nothing is imported then)."""
+    reader = csv.reader(stream)
+    header = _header(reader)
+    rows = [(line, fields) for line, fields in enumerate(reader, start=2) if fields]
     long = set(LONG) <= set(header)
     params = [name for name in header if name not in KEYS and name]
-    errors = [] if long else _unknown_columns(params, parameters)
-    tests: dict[tuple[str, datetime], dict[str, float]] = {}
-    for line, row in enumerate(reader, start=2):
-        shape = _shape_problem(row, line, len(header))
+    parsed = _Parsed(errors=[] if long else _unknown_columns(params, parameters))
+    parsed.errors.extend(decimal_comma_problems(header, rows, numeric=[] if long else params))
+    for line, fields in rows:
+        shape = _shape_problem(fields, line, len(header))
         if shape:
-            errors.append(shape)
+            parsed.errors.append(shape)
             continue
-        car, at = (row.get("car") or "").strip(), _when(row.get("taken_at") or "", line, errors)
-        if not car:
-            errors.append(f"line {line}: the car is empty")
-        if long:
-            name = (row.get("parameter") or "").strip()
-            if not name:
-                errors.append(f"line {line}: the parameter is empty")
-            cells = {name: row.get("value")} if name else {}
-        else:
-            cells = {p: row.get(p) for p in params}
-        values = {}
-        for name, text in cells.items():
-            if text is None or not text.strip():
-                continue
-            value = _number(text, line, name if not long else "value", errors)
-            if value is not None:
-                values[name] = value
-        refused = value_problems(parameters, values)
-        if not long:  # unknown columns were reported once, from the header
-            refused = {k: v for k, v in refused.items() if k in parameters}
-        errors.extend(f"line {line}, column {name}: {why}" for name, why in refused.items())
-        if car and at is not None and values:
-            tests.setdefault((car, at), {}).update(values)
-    _raise(errors, "fix these lines and import the file again (nothing was imported)")
-    if not tests:
+        _parse_row(dict(zip(header, fields, strict=True)), line, long, params, parameters, parsed)
+    _raise(parsed.errors, "fix these lines and import the file again (nothing was imported)")
+    if not parsed.tests:
         raise Unprocessable("the CSV holds no measurements; add rows under the header")
-    return [(car, at, values) for (car, at), values in tests.items()]
+    return [
+        (car, at, {name: value for name, (value, _) in values.items()})
+        for (car, at), values in parsed.tests.items()
+    ]
+
+
+def _parse_row(
+    row: dict[str, str],
+    line: int,
+    long: bool,
+    params: list[str],
+    parameters: Mapping[str, Parameter],
+    parsed: _Parsed,
+) -> None:
+    errors = parsed.errors
+    car, at = (row.get("car") or "").strip(), _when(row.get("taken_at") or "", line, errors)
+    if not car:
+        errors.append(f"line {line}: the car is empty")
+    if long:
+        name = (row.get("parameter") or "").strip()
+        if not name:
+            errors.append(f"line {line}: the parameter is empty")
+        cells = {name: row.get("value")} if name else {}
+    else:
+        cells = {p: row.get(p) for p in params}
+    values = {}
+    for name, text in cells.items():
+        if text is None or not text.strip():
+            continue
+        value = _number(text, line, name if not long else "value", errors)
+        if value is not None:
+            values[name] = value
+    refused = value_problems(parameters, values)
+    if not long:  # unknown columns were reported once, from the header
+        refused = {k: v for k, v in refused.items() if k in parameters}
+    errors.extend(f"line {line}, column {name}: {why}" for name, why in refused.items())
+    if car and at is not None and values:
+        parsed.add(car, at, values, line)
 
 
 def _raise(errors: list[str], fix: str) -> None:

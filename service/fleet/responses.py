@@ -6,7 +6,7 @@ Fields that the forecast payload adds as the methods grow are allowed through
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -21,6 +21,9 @@ class MeasurementsStored(Answer):
     car: str
     taken_at: Instant
     measurements: int = Field(description="how many parameter values were stored")
+    status: Literal["created", "duplicate"] = Field(
+        "created", description="duplicate: the same test was stored before (nothing stored now)"
+    )
 
 
 class ParameterOut(Answer):
@@ -85,7 +88,13 @@ class CarSummary(Answer):
     recommendation: str = Field(description="plan_withdrawal, watch, serviceable or unknown")
     decision: str
     first_exit: ExitStep | None
-    out_of_band_now: bool = Field(description="the latest index already lies outside its band")
+    out_of_band_now: bool = Field(
+        description="the latest index, or a parameter at the latest test, is already outside"
+        " its band (the car ranks before every car inside its band)"
+    )
+    out_of_tolerance_now: list[str] = Field(
+        default_factory=list, description="parameters outside tolerance at the latest test"
+    )
     k_of_l_probability: float | None = None
     reasons: list[str]
     weights: dict[str, float]

@@ -17,7 +17,7 @@ from sqlalchemy.dialects.sqlite import insert as sqlite_insert
 from sqlalchemy.orm import Session
 
 from core.auth import Principal
-from core.errors import Conflict, NotFound
+from core.errors import Conflict, NotFound, Unprocessable
 from core.models import Car
 from service.fleet.models import (
     MaintenanceOverride,
@@ -27,6 +27,7 @@ from service.fleet.models import (
     decode_readings,
     encode_readings,
 )
+from service.fleet.rules import RULES, plausible_range
 from service.fleet.schemas import ParameterIn
 
 
@@ -109,11 +110,48 @@ def measured_values(session: Session, test: Measurement) -> dict[str, float]:
     return dict(zip(layout.names, decode_readings(test.readings), strict=True))
 
 
+def stored_test(session: Session, car_id: str, taken_at: datetime) -> dict[str, float] | None:
+    """The values stored for the car's test at ``taken_at`` (None: no such test yet)."""
+    query = (
+        select(Measurement)
+        .where(Measurement.car_id == car_id, Measurement.taken_at == taken_at)
+        .order_by(Measurement.id)
+    )
+    rows = list(session.scalars(query))
+    if not rows:
+        return None
+    values: dict[str, float] = {}
+    for row in rows:  # tests stored at the same time merge, as the forecast reads them
+        values.update(measured_values(session, row))
+    return values
+
+
 def list_parameters(session: Session) -> list[Parameter]:
     return list(session.scalars(select(Parameter).order_by(Parameter.name)))
 
 
+def check_plausible_range(data: ParameterIn) -> None:
+    """422 unless the plausible range, with the band's defaults for an unset limit, is an
+    interval: an inverted one would refuse every value, or hide which limit was meant."""
+    lower, upper = plausible_range(Parameter(**data.model_dump()))
+    if lower < upper:
+        return
+    given = [
+        f"{name} = {value:g}"
+        for name, value in (("plausible_lower", lower), ("plausible_upper", upper))
+        if getattr(data, name) is not None
+    ]
+    loc = "plausible_lower" if data.plausible_lower is not None else "plausible_upper"
+    raise Unprocessable(
+        f"the plausible range {lower:g}…{upper:g} of {data.name} is empty ({', '.join(given)});"
+        " give plausible_lower below plausible_upper (an unset limit is nominal ±"
+        f" {RULES.plausible_tolerances:g} tolerances)",
+        errors=[{"loc": ["body", loc], "msg": "plausible_lower must be below plausible_upper"}],
+    )
+
+
 def create_parameter(session: Session, data: ParameterIn) -> Parameter:
+    check_plausible_range(data)
     if session.get(Parameter, data.name) is not None:
         raise Conflict(
             f"parameter {data.name!r} already exists; change its band with"
@@ -131,6 +169,7 @@ def update_parameter(session: Session, name: str, data: ParameterIn) -> Paramete
         raise NotFound(f"parameter {name!r} does not exist; create it with POST first")
     if data.name != name:
         raise Conflict(f"the body names parameter {data.name!r}, the path {name!r}")
+    check_plausible_range(data)
     for field, value in data.model_dump().items():
         setattr(parameter, field, value)
     session.flush()

@@ -18,8 +18,20 @@ WITHDRAW_RISK = 0.5
 WATCH_RISK = 0.1
 
 
+def out_now(forecast: Forecast) -> bool:
+    """Whether the car is already out of its band: its index, or a parameter's tolerance."""
+    payload = forecast.payload or {}
+    return bool(payload.get("out_of_band_now") or payload.get("out_of_tolerance_now"))
+
+
 def recommendation(forecast: Forecast) -> str:
-    """``plan_withdrawal``, ``watch``, ``serviceable`` or ``unknown`` (no usable forecast)."""
+    """``plan_withdrawal``, ``watch``, ``serviceable`` or ``unknown`` (no usable forecast).
+
+    A car already out of its band is planned out whatever its forecast (safety: a person must
+    look), even when the forecast failed or the index band was not calibrated.
+    """
+    if out_now(forecast):
+        return "plan_withdrawal"
     if forecast.status != "ok" or forecast.risk is None:
         return "unknown"
     if forecast.risk >= WITHDRAW_RISK or forecast.payload.get("first_exit") is not None:
@@ -27,12 +39,15 @@ def recommendation(forecast: Forecast) -> str:
     return "watch" if forecast.risk >= WATCH_RISK else "serviceable"
 
 
-def rank_key(forecast: Forecast) -> tuple[int, float, float]:
-    """As :func:`maintenance.fleet.rank_fleet`: risk first, then earliest exit; unknown last."""
+def rank_key(forecast: Forecast) -> tuple[int, int, float, float]:
+    """Cars already out of their band first, whatever their risk; then as
+    :func:`maintenance.fleet.rank_fleet`: risk first, then earliest exit; unknown last."""
+    first = 0 if out_now(forecast) else 1
     if forecast.status != "ok" or forecast.risk is None:
-        return (1, 0.0, 0.0)
+        return (first, 1, 0.0, 0.0)
     exit_step = forecast.payload.get("first_exit")
-    return (0, -forecast.risk, float(exit_step) if exit_step is not None else float("inf"))
+    ahead = float(exit_step) if exit_step is not None else float("inf")
+    return (first, 0, -forecast.risk, ahead)
 
 
 def latest_forecast(session: Session, car_id: str) -> Forecast | None:
@@ -102,7 +117,8 @@ def summary_out(forecast: Forecast, override: MaintenanceOverride | None) -> dic
         "recommendation": advice,
         "decision": override.action if override is not None else advice,
         "first_exit": first_exit,
-        "out_of_band_now": bool(p.get("out_of_band_now")),
+        "out_of_band_now": out_now(forecast),
+        "out_of_tolerance_now": list(p.get("out_of_tolerance_now") or []),
         "k_of_l_probability": p.get("k_of_l_probability"),
         "reasons": p.get("reasons", []),
         "weights": p.get("weights", {}),

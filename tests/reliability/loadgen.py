@@ -23,6 +23,7 @@ import numpy as np
 
 from identification.simulate import ir_pulses_passage, wheel_mark_passage
 from tail_check.synth import render_snapshot
+from tests.service.linekit import BANDS
 
 STATIONS = [f"S{i}" for i in range(6)]
 SECTIONS = [(f"S{i}S{i + 1}", f"S{i}", f"S{i + 1}") for i in range(5)]
@@ -123,6 +124,8 @@ def build_line(url: str, admin: dict[str, str]) -> list[Device]:
             for code in car_codes(index):
                 body = {"id": f"0{code}", "wheel_code": code, "ir_number": code, "axles": 4}
                 client.post("/cars", json=body).raise_for_status()
+        for band in BANDS:  # the test bench's values must name registered parameters
+            client.post("/maintenance/parameters", json=band).raise_for_status()
     return devices
 
 

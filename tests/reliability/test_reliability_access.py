@@ -22,7 +22,7 @@ from service.models import metadata
 from service.setup.service import create_user
 from tests.conftest import ADMIN, ADMIN_TOKEN
 from tests.reliability.matrix import DEVICE_ROLES, ENDPOINTS, KIND_OF, ROLES
-from tests.service.linekit import build_line
+from tests.service.linekit import build_line, register_bands
 
 PARAMS = {
     "station_id": "A",
@@ -66,6 +66,7 @@ def _request(client: TestClient, method: str, path: str, headers: dict[str, str]
 @pytest.fixture
 def credentials(client: TestClient, session: Session) -> dict[str, dict[str, str]]:
     keys = build_line(client)
+    register_bands(client)  # a measurement's values must name registered parameters
     people = {
         role: create_user(session, f"acc-{role}", role) for role in ("dispatcher", "engineer")
     }

@@ -11,7 +11,7 @@ from sqlalchemy import Engine, func, select
 from sqlalchemy.orm import Session
 
 from ingest.models import RawEvent
-from tests.service.linekit import build_line, event
+from tests.service.linekit import build_line, event, register_bands
 
 WHEEL_AXLES = [
     [2170, 1931, 2165, 2169, 1928, 1933, 2172, 1930],
@@ -81,6 +81,7 @@ EXAMPLES: list[tuple[str, dict[str, Any]]] = [
 @pytest.mark.parametrize(("device", "body"), EXAMPLES, ids=[b["kind"] for _, b in EXAMPLES])
 def test_every_kind_accepted_once(client: TestClient, device: str, body: dict[str, Any]) -> None:
     keys = build_line(client)
+    register_bands(client)  # a measurement's values must name registered parameters
     first = client.post("/api/v1/events", json=body, headers=keys[device])
     assert first.status_code == 201, first.text
     assert first.json()["event_id"] == body["event_id"] and first.json()["status"] == "created"
