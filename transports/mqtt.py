@@ -25,6 +25,7 @@ from paho.mqtt.properties import Properties
 from sqlalchemy.orm import Session, sessionmaker
 
 from transports.envelope import DATABASE_DOWN, Answer, Message, handle_batch
+from transports.stats import BatchStats
 
 log = logging.getLogger("depot.mqtt")
 SESSION_EXPIRY_S = 7 * 24 * 3600  # a bridge down for a week still finds its queued messages
@@ -82,6 +83,7 @@ class Bridge:
         self.incoming: queue.Queue[_Incoming] = queue.Queue()
         self.stopping = threading.Event()
         self.connection = 0
+        self.stats = BatchStats(log)
         self.client = mqtt.Client(
             CallbackAPIVersion.VERSION2,
             client_id=config.client_id,
@@ -142,12 +144,15 @@ class Bridge:
         delay = 0.5
         while not self.stopping.is_set():
             try:
-                return handle_batch(
+                started = time.monotonic()
+                answers = handle_batch(
                     self.sessions,
                     [i.message for i in items],
                     transport="mqtt",
                     max_bytes=self.config.max_bytes,
                 )
+                self.stats.record(len(items), time.monotonic() - started)
+                return answers
             except DATABASE_DOWN as exc:
                 name = type(exc).__name__
                 log.warning("database unavailable (%s); retrying in %.1f s", name, delay)
