@@ -31,6 +31,9 @@ log = logging.getLogger("depot.mqtt")
 SESSION_EXPIRY_S = 7 * 24 * 3600  # a bridge down for a week still finds its queued messages
 SHARE_GROUP = "depot"
 KEY_PROPERTY = "device-key"
+# How long a batch waits for more messages after its first: a burst is committed together
+# (one commit, a few statements per device) at the price of this much latency when idle.
+LINGER_S = 0.02
 
 
 @dataclass(frozen=True)
@@ -127,14 +130,19 @@ class Bridge:
         )
 
     def _take(self) -> list[_Incoming]:
-        """The next batch: what is waiting, at most ``batch`` messages; [] after a quiet 0.5 s."""
+        """The next batch: up to ``batch`` messages, collected for at most ``LINGER_S`` after
+        the first; [] after a quiet 0.5 s."""
         try:
             items = [self.incoming.get(timeout=0.5)]
         except queue.Empty:
             return []
+        until = time.monotonic() + LINGER_S
         while len(items) < self.config.batch:
+            left = until - time.monotonic()
             try:
-                items.append(self.incoming.get_nowait())
+                items.append(
+                    self.incoming.get(timeout=left) if left > 0 else self.incoming.get_nowait()
+                )
             except queue.Empty:
                 break
         return items
