@@ -62,9 +62,9 @@ class Rows:
         self.engine.dispose()
 
 
-def _messages(line: Line, transport: str) -> list[tuple[str, str, bytes]]:
+def _messages(line: Line, transport: str) -> list[tuple[str, str | None, bytes]]:
     senders = [d for d in line.devices if d.kind != "camera"]
-    out = []
+    out: list[tuple[str, str | None, bytes]] = []
     for n in range(BACKLOG[transport]):
         device = senders[n % len(senders)]
         event = {"event_id": f"{backlog_prefix(transport)}{n}", "kind": "heartbeat",
@@ -90,7 +90,7 @@ def _settle(
     request: pytest.FixtureRequest,
     line: Line,
     transport: str,
-    messages: list[tuple[str, str, bytes]],
+    messages: list[tuple[str, str | None, bytes]],
     at_kill: dict[str, int],
     rows: Rows,
 ) -> None:

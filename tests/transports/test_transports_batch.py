@@ -19,7 +19,6 @@ from ingest import service
 from service import features
 from tests.reliability.conftest import ADMIN_HEADERS
 from tests.transports.conftest import Line
-from transports import envelope
 from transports.envelope import Message, handle_batch
 
 LIMIT = 4096
@@ -107,8 +106,8 @@ def test_a_batch_that_fails_together_is_redone_message_by_message(
             raise ValueError("poisoned")
         return real_event(session, device, payload, **kw)
 
-    monkeypatch.setattr(envelope.service, "accept_batch", poisoned_batch)
-    monkeypatch.setattr(envelope.service, "accept_event", poisoned_event)
+    monkeypatch.setattr(service, "accept_batch", poisoned_batch)
+    monkeypatch.setattr(service, "accept_event", poisoned_event)
     key, other = _keys(line)[SENDER], _keys(line)[OTHER]
     batch = [
         Message(SENDER, key, _heartbeat("bad-redo-1")),
