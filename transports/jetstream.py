@@ -14,6 +14,7 @@ import asyncio
 import contextlib
 import logging
 import signal
+import time
 from dataclasses import dataclass
 
 import nats
@@ -25,6 +26,7 @@ from nats.js.errors import NotFoundError
 from sqlalchemy.orm import Session, sessionmaker
 
 from transports.envelope import DATABASE_DOWN, Answer, Message, handle_batch
+from transports.stats import BatchStats
 
 log = logging.getLogger("depot.consume")
 CONSUMER = "depot-ingest"
@@ -112,6 +114,7 @@ class Consumer:
         self.sessions, self.config = sessions, config
         self.failures: dict[int, str] = {}  # stream sequence → why its last delivery failed
         self.stopping = asyncio.Event()
+        self.stats = BatchStats(log)
 
     async def _dead_letter(self, js: JetStreamContext, msg: Msg) -> None:
         sequence = msg.metadata.sequence.stream
@@ -148,6 +151,7 @@ class Consumer:
                 live.append(msg)
         if not live:
             return
+        started = time.monotonic()
         try:
             answers = await asyncio.to_thread(
                 handle_batch,
@@ -162,6 +166,7 @@ class Consumer:
                 self.failures[msg.metadata.sequence.stream] = f"database unavailable ({exc})"
                 await msg.nak(delay=min(2.0**msg.metadata.num_delivered, MAX_NAK_DELAY_S))
             return
+        self.stats.record(len(live), time.monotonic() - started)
         for msg, answer in zip(live, answers, strict=True):
             await self._settle(nc, msg, answer)
 

@@ -1,0 +1,157 @@
+"""One broker batch, handled in-process on the line's database: every bad message gets its own
+answer and leaves the others stored; a batch that fails together is redone message by
+message; a database that fails acknowledges nothing."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from typing import Any
+
+import httpx
+import pytest
+from sqlalchemy import create_engine, text
+from sqlalchemy.exc import OperationalError
+from sqlalchemy.orm import Session, sessionmaker
+
+from core.auth import device_cache
+from ingest import service
+from service import features
+from tests.reliability.conftest import ADMIN_HEADERS
+from tests.transports.conftest import Line
+from transports.envelope import Message, handle_batch
+
+LIMIT = 4096
+SENDER, OTHER = "T1-obu", "T2-obu"
+UNREACHABLE = "postgresql+psycopg://postgres@127.0.0.1:1/nowhere"  # nothing listens on port 1
+
+
+def _heartbeat(event_id: str, **fields: Any) -> bytes:
+    return json.dumps({"event_id": event_id, "kind": "heartbeat",
+                       "occurred_at": "2026-11-23T03:00:00Z", **fields}).encode()  # fmt: skip
+
+
+@pytest.fixture
+def sessions(line: Line) -> Iterator[sessionmaker[Session]]:
+    features.install()
+    engine = create_engine(line.database_url)
+    yield sessionmaker(engine)
+    engine.dispose()
+
+
+def _keys(line: Line) -> dict[str, str]:
+    return {d.id: d.key for d in line.devices}
+
+
+def _stored(line: Line, like: str) -> list[str]:
+    engine = create_engine(line.database_url)
+    with engine.connect() as connection:
+        rows = connection.execute(
+            text("SELECT event_id FROM raw_events WHERE event_id LIKE :p ORDER BY event_id"),
+            {"p": like},
+        ).all()
+    engine.dispose()
+    return [r[0] for r in rows]
+
+
+def test_bad_messages_in_one_batch_disturb_nothing(
+    line: Line, sessions: sessionmaker[Session]
+) -> None:
+    key, other = _keys(line)[SENDER], _keys(line)[OTHER]
+    batch = [
+        Message(SENDER, key, _heartbeat("bad-batch-1")),
+        Message(SENDER, other, _heartbeat("bad-batch-wrongkey")),
+        Message(SENDER, None, _heartbeat("bad-batch-nokey")),
+        Message(SENDER, key, b"{not json"),
+        Message(SENDER, key, _heartbeat("bad-batch-tea", kind="tea")),
+        Message(SENDER, key, b'{"pad": "' + b"x" * LIMIT + b'"}'),
+        Message(SENDER, key, _heartbeat("bad-batch-dep", kind="train_departed", section="S0S1",
+                                         train="1")),
+        Message(SENDER, key, _heartbeat("bad-batch-1")),  # a redelivery in the same batch
+        Message(SENDER, key, _heartbeat("bad-batch-1", occurred_at="2026-11-23T03:00:01Z")),
+        Message(OTHER, other, json.dumps({"events": [json.loads(_heartbeat("bad-batch-2")),
+                                                     {"kind": "tea"}]}).encode()),
+        Message(OTHER, other, json.dumps({"events": []}).encode()),
+        Message(SENDER, key, _heartbeat("bad-batch-3")),
+    ]  # fmt: skip
+    answers = handle_batch(sessions, batch, transport="mqtt", max_bytes=LIMIT)
+    assert [a.status for a in answers] == [201, 401, 401, 422, 422, 413, 403, 200, 409, 200,
+                                           422, 201]  # fmt: skip
+    assert not any(a.retry for a in answers)
+    assert answers[7].body["status"] == "duplicate"
+    assert answers[4].body["event_id"] == "bad-batch-tea" and answers[4].body["detail"]
+    items = answers[9].body["results"]
+    assert [i["status"] for i in items] == ["created", "rejected"]
+    assert items[1]["error"]["status"] == 422
+    for answer in answers:
+        assert json.loads(answer.to_json())["http_status"] == answer.status
+    assert _stored(line, "bad-batch-%") == ["bad-batch-1", "bad-batch-2", "bad-batch-3"]
+
+
+def test_a_batch_that_fails_together_is_redone_message_by_message(
+    line: Line, sessions: sessionmaker[Session], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The together path fails for one device (as a value the database refuses would):
+    the others are still stored once, and only the message that fails by itself is
+    answered 500 (unacknowledged over NATS, to come again)."""
+    real_batch, real_event = service.accept_batch, service.accept_event
+
+    def poisoned_batch(session: Session, device: Any, items: Any, **kw: Any) -> Any:
+        if device.id == OTHER:
+            raise ValueError("poisoned")
+        return real_batch(session, device, items, **kw)
+
+    def poisoned_event(session: Session, device: Any, payload: Any, **kw: Any) -> Any:
+        if payload.get("event_id") == "bad-redo-poison":
+            raise ValueError("poisoned")
+        return real_event(session, device, payload, **kw)
+
+    monkeypatch.setattr(service, "accept_batch", poisoned_batch)
+    monkeypatch.setattr(service, "accept_event", poisoned_event)
+    key, other = _keys(line)[SENDER], _keys(line)[OTHER]
+    batch = [
+        Message(SENDER, key, _heartbeat("bad-redo-1")),
+        Message(OTHER, other, _heartbeat("bad-redo-2")),
+        Message(OTHER, other, _heartbeat("bad-redo-poison")),
+        Message(SENDER, key, b"[1"),
+    ]
+    answers = handle_batch(sessions, batch, transport="nats", max_bytes=LIMIT)
+    assert [(a.status, a.retry) for a in answers] == [
+        (201, False), (201, False), (500, True), (422, False)
+    ]  # fmt: skip
+    assert _stored(line, "bad-redo-%") == ["bad-redo-1", "bad-redo-2"]
+
+
+def test_database_down_raises_so_nothing_is_acknowledged(line: Line) -> None:
+    engine = create_engine(UNREACHABLE)
+    key = _keys(line)[SENDER]
+    with pytest.raises(OperationalError):
+        handle_batch(
+            sessionmaker(engine),
+            [Message(SENDER, key, _heartbeat("bad-down-1"))],
+            transport="mqtt",
+            max_bytes=LIMIT,
+        )
+    engine.dispose()
+
+
+def test_decommissioned_device_is_refused_as_over_http(
+    line: Line, sessions: sessionmaker[Session]
+) -> None:
+    like = next(d for d in line.devices if d.id == SENDER)
+    body = {"id": "bad-decom-obu", "station": like.station, "kind": like.kind}
+    if like.section is not None:
+        body["section"] = like.section
+    api = f"{line.servers[0].url}/api/v1"
+    created = httpx.post(f"{api}/devices", json=body, headers=ADMIN_HEADERS)
+    assert created.status_code == 201, created.text
+    key = created.json()["key"]
+    message = Message("bad-decom-obu", key, _heartbeat("bad-decom-1"))
+    assert handle_batch(sessions, [message], transport="mqtt", max_bytes=LIMIT)[0].status == 201
+    gone = httpx.post(f"{api}/devices/bad-decom-obu/decommission", headers=ADMIN_HEADERS)
+    assert gone.status_code == 200, gone.text
+    device_cache().invalidate("bad-decom-obu")  # as the worker that decommissions it does
+    message = Message("bad-decom-obu", key, _heartbeat("bad-decom-2"))
+    (answer,) = handle_batch(sessions, [message], transport="mqtt", max_bytes=LIMIT)
+    assert answer.status == 401 and answer.body["detail"], answer.body  # its key was replaced
+    assert _stored(line, "bad-decom-%") == ["bad-decom-1"]
