@@ -62,7 +62,8 @@ def serve_floor(database_url: str, keys: list[str]) -> Iterator[str]:
     port = free_port()
     uvicorn = str(Path(sys.executable).parent / "uvicorn")
     command = [uvicorn, "bench.floor_app:create_app", "--factory", "--workers", "2",
-               "--port", str(port), "--log-level", "warning", "--timeout-worker-healthcheck", "60"]  # fmt: skip
+               "--port", str(port), "--log-level", "warning",
+               "--timeout-worker-healthcheck", "60"]  # fmt: skip
     env = {**os.environ, "FLOOR_DATABASE_URL": database_url}
     log_dir = Path(tempfile.mkdtemp(prefix="depot-floor-"))
     with running(command, env, log_dir, f"http://127.0.0.1:{port}/healthz"):
