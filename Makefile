@@ -28,7 +28,9 @@ install: $(STAMP)
 run: $(RUN_STAMP)
 	@$(VENV)/bin/depot migrate
 	@$(VENV)/bin/depot demo
-	@$(VENV)/bin/depot serve
+	@# The simulator keeps the demo line alive beside the server and stops with it.
+	@$(VENV)/bin/depot simulate --url http://$${DEPOT_HOST:-127.0.0.1}:$${DEPOT_PORT:-8000} & sim=$$!; \
+	  trap "kill $$sim 2>/dev/null" EXIT; $(VENV)/bin/depot serve
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
