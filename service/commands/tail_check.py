@@ -219,9 +219,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     p.add_argument(
         "--disc", required=True, type=_parse_point, metavar="X,Y", help="a pixel inside the disc"
     )
-    p.add_argument("--base", help="profile whose other settings to keep")
+    p.add_argument(
+        "--base", help="profile whose other settings to keep (default: standard signal red)"
+    )
     p.add_argument("--name", default="calibrated", help="profile name")
-    p.add_argument("--out", help="also write the profile to this file")
+    p.add_argument("--out", help="also write the profile to this file (default: print only)")
     p.set_defaults(func=_calibrate)
 
     p = subparsers.add_parser("tail-study", help="ε(c_Δ) study for box/disk/Gaussian filters")
@@ -237,9 +239,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     p.set_defaults(func=_tail_study)
 
     p = subparsers.add_parser("tail-synth", help="write generated labelled snapshots")
-    p.add_argument("directory", metavar="DIR")
-    p.add_argument("--count", type=int, default=100)
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("directory", metavar="DIR", help="an empty (or new) folder for the images")
+    p.add_argument("--count", type=int, default=100, help="labelled images to write")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the scenes")
     p.add_argument("--size", default="640x480", help="WIDTHxHEIGHT in pixels (default 640x480)")
     p.add_argument(
         "--force", action="store_true", help="write into a folder that already holds files"
