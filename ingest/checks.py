@@ -103,5 +103,6 @@ def validate_snapshot(session: Session, device: Device, payload: dict[str, Any])
         fields = ", ".join(".".join(e["loc"][1:]) for e in errors[:5])
         raise Unprocessable(f"invalid snapshot: {fields}", errors=errors) from None
     check_device_may_send(device, event.kind)
+    check_clock(event, utcnow())
     check_section(session, device, event.section)
     return event

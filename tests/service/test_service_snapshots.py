@@ -118,3 +118,21 @@ def test_only_cameras_upload_and_fields_required(client: TestClient) -> None:
     )
     assert response.status_code == 422
     assert {"occurred_at", "section"} <= {e["loc"][-1] for e in response.json()["errors"]}
+
+
+def test_a_camera_clock_ahead_of_the_server_is_refused(client: TestClient) -> None:
+    """A photo dated 10 min ahead must not count for a run (found by the independent trial:
+    snapshots escaped the clock rule every other event obeys); nothing of it is stored."""
+    from datetime import UTC, datetime, timedelta
+
+    keys = build_line(client)
+    ahead = (datetime.now(UTC) + timedelta(minutes=10)).isoformat()
+    form = {"event_id": "ahead-1", "occurred_at": ahead, "section": "AB"}
+    files = {"image": ("tail.jpg", encoded(".jpg"), "image/jpeg")}
+    answer = client.post("/api/v1/snapshots", data=form, files=files, headers=keys["B-cam"])
+    assert answer.status_code == 422, answer.text
+    assert answer.headers["content-type"].startswith("application/problem+json")
+    assert "ahead of the server's clock" in answer.json()["detail"]
+    retry = client.post("/api/v1/snapshots", data={**form, "occurred_at": "2026-11-23T10:41:00Z"},
+                        files=files, headers=keys["B-cam"])  # fmt: skip
+    assert retry.status_code == 201, "a refused event leaves nothing behind to conflict with"
