@@ -84,7 +84,13 @@ class Simulator:
         got = self.line.client.get("/api/v1/sections", headers=self.line.admin)
         got.raise_for_status()
         states = {s["id"]: s["state"] for s in got.json()}
-        free = [i for i, state in states.items() if state == "free" and i not in self.running]
+        # Only the demo line's sections: an operator's own sections are never driven.
+        ours = {section[0] for section in SECTIONS}
+        free = [
+            i
+            for i, state in states.items()
+            if state == "free" and i in ours and i not in self.running
+        ]
         held = ", ".join(f"{i} {state}" for i, state in states.items() if state != "free")
         if not free and held != self.waiting:
             _say(f"no free section ({held}): the next train waits for the dispatcher")
@@ -125,7 +131,8 @@ class Simulator:
         answer = self.line.post(
             f"{trip.destination}-ilk", "train_arrived", now, section=section, train=trip.train
         )
-        verdict = (answer.get("decision") or {}).get("verdict", "?")
+        verdict = answer.get("verdict") or "not decided yet (evidence outstanding)"
+        verdict += f", section {answer['section_state']}" if "section_state" in answer else ""
         _say(f"train {trip.train} arrives at {trip.destination} ({going.outcome}): {verdict}")
 
     def tick(self, now: float, due: dict[str, float]) -> None:

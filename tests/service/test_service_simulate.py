@@ -132,3 +132,21 @@ def test_simulate_without_a_server_says_so(capsys: pytest.CaptureFixture[str]) -
         port = s.getsockname()[1]  # nothing listens there once closed
     assert main(["simulate", "--url", f"http://127.0.0.1:{port}", "--wait", "1"]) == 2
     assert "no server answers" in capsys.readouterr().err
+
+
+def test_simulate_drives_only_the_demo_sections_beside_others(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An operator's own free section beside the demo line is left alone (found by the
+    independent trial: the simulator died with StopIteration on it)."""
+    with live_server(tmp_path) as url:
+        assert main(["simulate", "--url", url, *FAST, "--duration", "1"]) == 0
+        for station in ("X", "Y"):
+            body = {"id": station, "name": station}
+            assert httpx.post(f"{url}/api/v1/stations", json=body, headers=ADMIN).status_code == 201
+        section = {"id": "XY", "from_station": "X", "to_station": "Y"}
+        assert httpx.post(f"{url}/api/v1/sections", json=section, headers=ADMIN).status_code == 201
+        assert main(["simulate", "--url", url, *FAST, "--duration", "4"]) == 0
+        assert {run["section"] for run in _runs(url)} <= {"AB", "BC"}
+    out = capsys.readouterr().out
+    assert "departs" in out and "?" not in out.replace("?run", "")
