@@ -10,6 +10,7 @@ from pydantic import (
     AfterValidator,
     AwareDatetime,
     BaseModel,
+    BeforeValidator,
     ConfigDict,
     Field,
     TypeAdapter,
@@ -33,7 +34,18 @@ def _plausible(at: datetime) -> datetime:
     return at
 
 
-DeviceTime = Annotated[AwareDatetime, AfterValidator(_plausible)]
+def _integral(value: object) -> object:
+    """protocol.md: number spelling does not matter, so 10.0 is the integer 10; anything else
+    (true, "12", 12.5) is left for strict validation to refuse."""
+    if isinstance(value, float) and value.is_integer():
+        return int(value)
+    return value
+
+
+# An integer field: a JSON number with no fraction; never a boolean or a string.
+Integer = Annotated[int, BeforeValidator(_integral)]
+# Times come as ISO-8601 text, so they alone are parsed (every other field is strict).
+DeviceTime = Annotated[AwareDatetime, Field(strict=False), AfterValidator(_plausible)]
 EventId = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[\x21-\x7e]+$")]
 SectionId = Annotated[str, Field(min_length=1, max_length=32)]
 TrainNumber = Annotated[str, Field(min_length=1, max_length=32)]
@@ -45,7 +57,9 @@ class EventBase(BaseModel):
     """Fields every device event has. ``senders`` are the device kinds that may send the kind
     (another device gets 403); it is the one place that rule is written."""
 
-    model_config = ConfigDict(extra="forbid")
+    # Strict: a count sent as true or "12" is refused, never read as 1 or 12 (a device that
+    # sends the wrong JSON type has a bug its integrator must see).
+    model_config = ConfigDict(extra="forbid", strict=True)
     senders: ClassVar[frozenset[str]] = frozenset()
 
     event_id: EventId
@@ -56,7 +70,7 @@ class SectionEvent(EventBase):
     section: SectionId
 
 
-EotUnitAddress = Annotated[int, Field(ge=0, le=2**17 - 1)]  # 17 bits on the air
+EotUnitAddress = Annotated[Integer, Field(ge=0, le=2**17 - 1)]  # 17 bits on the air
 
 
 class TrainDeparted(SectionEvent):
@@ -76,13 +90,13 @@ class TrainArrived(SectionEvent):
 class AxleCount(SectionEvent):
     kind: Literal["axle_count"]
     senders = frozenset({"axle_counter"})
-    axles: Annotated[int, Field(ge=0, le=10_000)]
+    axles: Annotated[Integer, Field(ge=0, le=10_000)]
 
 
 class IrId(SectionEvent):
     kind: Literal["ir_id"]
     senders = frozenset({"ir_reader"})
-    reads: Annotated[list[Annotated[int, Field(ge=0, le=2**32)]], Field(max_length=10_000)]
+    reads: Annotated[list[Annotated[Integer, Field(ge=0, le=2**32)]], Field(max_length=10_000)]
 
 
 class IrPulses(SectionEvent):
@@ -97,7 +111,7 @@ class IrPulses(SectionEvent):
 class IrManchester(SectionEvent):
     kind: Literal["ir_manchester"]
     senders = frozenset({"ir_reader"})
-    samples_per_bit: Annotated[int, Field(ge=2, le=1024)]
+    samples_per_bit: Annotated[Integer, Field(ge=2, le=1024)]
     samples: Annotated[list[Literal[0, 1]], Field(max_length=1_000_000)]
 
 
@@ -105,9 +119,9 @@ class WheelMarks(SectionEvent):
     kind: Literal["wheel_marks"]
     senders = frozenset({"wheel_mark_reader"})
     direction: Literal[1, 2]
-    baseline: Annotated[list[int], Field(min_length=5, max_length=10_000)]
+    baseline: Annotated[list[Integer], Field(min_length=5, max_length=10_000)]
     axles: Annotated[
-        list[Annotated[list[int], Field(min_length=1, max_length=256)]],
+        list[Annotated[list[Integer], Field(min_length=1, max_length=256)]],
         Field(min_length=1, max_length=32),
     ]
 
@@ -116,7 +130,7 @@ class WheelMarksWritten(EventBase):
     kind: Literal["wheel_marks_written"]
     senders = frozenset({"marking_station"})
     car: CarId
-    code: Annotated[int, Field(ge=0, le=2**32)]
+    code: Annotated[Integer, Field(ge=0, le=2**32)]
     detections: Annotated[list[Literal["W1", "W2"]], Field(max_length=1000)]
 
 
@@ -207,10 +221,10 @@ class EotStatus(SectionEvent):
     kind: Literal["eot_status"]
     senders = frozenset({"eot_receiver"})
     unit_address: EotUnitAddress
-    pressure_psig: Annotated[int, Field(ge=0, le=127)]
+    pressure_psig: Annotated[Integer, Field(ge=0, le=127)]
     motion: bool | None = None
     marker_light: bool | None = None
-    battery_charge: Annotated[int, Field(ge=0, le=127)] | None = None  # raw 7-bit value
+    battery_charge: Annotated[Integer, Field(ge=0, le=127)] | None = None  # raw 7-bit value
     bits: Annotated[str, Field(pattern=rf"^[01]{{{PACKET_BITS}}}$")] | None = None
 
     @model_validator(mode="after")

@@ -281,3 +281,23 @@ def test_a_retry_in_another_spelling_is_the_same_event(client: TestClient) -> No
         assert again.json()["status"] == "duplicate"
     other = client.post("/api/v1/events", json={**body, "axles": 11}, headers=keys["A-ac"])
     assert other.status_code == 409
+
+
+def test_numbers_of_the_wrong_json_type_are_refused(client: TestClient) -> None:
+    """``"axles": true`` was counted as 1 axle and ``"12"`` as 12 (found by the independent
+    trial); a count, a code or a value must come as a JSON number."""
+    from datetime import UTC, datetime
+
+    from tests.service.linekit import build_line
+
+    keys = build_line(client)
+    now = datetime.now(UTC).isoformat()
+    for n, axles in enumerate((True, "12", 12.5, None)):
+        body = {"event_id": f"type-{n}", "occurred_at": now, "kind": "axle_count",
+                "section": "AB", "axles": axles}  # fmt: skip
+        answer = client.post("/api/v1/events", json=body, headers=keys["A-ac"])
+        assert answer.status_code == 422, (axles, answer.text)
+        assert answer.json()["errors"][0]["loc"][-1] == "axles"
+    good = {"event_id": "type-ok", "occurred_at": now, "kind": "axle_count", "section": "AB",
+            "axles": 12}  # fmt: skip
+    assert client.post("/api/v1/events", json=good, headers=keys["A-ac"]).status_code == 201
