@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import time
 from typing import Any
 
@@ -27,6 +26,7 @@ from ingest import service
 from ingest.batches import batch_events
 from ingest.commit_queue import committer_for
 from ingest.device_auth import EventDevice
+from ingest.payload import read_json
 from ingest.schemas import BatchResult, EventAck
 from ingest.snapshots import check_image, store_image
 
@@ -63,17 +63,6 @@ async def _read_limited(request: Request, limit: int) -> bytes:
     return b"".join(chunks)
 
 
-def _json(data: bytes) -> Any:
-    try:
-        return json.loads(data)
-    except RecursionError:
-        raise Unprocessable("the JSON is nested too deeply") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise Unprocessable(
-            f"the body is not valid JSON ({exc})", errors=[{"loc": ["body"], "msg": "invalid JSON"}]
-        ) from None
-
-
 @router.post(
     "/events",
     openapi_extra=EVENT_BODY_DOC,
@@ -95,7 +84,7 @@ async def post_events(request: Request, session: DbSession, device: EventDevice)
     if not content_type.split(";")[0].strip().lower().endswith("json"):
         raise UnsupportedMediaType("send events as application/json")
     body = await _read_limited(request, settings.max_body_bytes)
-    payload = _json(body)
+    payload = read_json(body)
     events = batch_events(payload)
     if events is not None:
         results = await run_in_threadpool(service.accept_batch, session, device, events)

@@ -29,6 +29,7 @@ from core.errors import (
 from core.models import Device
 from ingest import service
 from ingest.batches import batch_events
+from ingest.payload import read_json
 
 log = logging.getLogger("depot.transports")
 
@@ -81,15 +82,7 @@ def decode(data: bytes, max_bytes: int) -> Any:
     """The JSON of a payload, as ``POST /events`` reads its body (413 and 422 alike)."""
     if len(data) > max_bytes:
         raise PayloadTooLarge(f"the payload has {len(data)} bytes; the limit is {max_bytes}")
-    try:
-        return json.loads(data)
-    except RecursionError:
-        raise Unprocessable("the JSON is nested too deeply") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise Unprocessable(
-            f"the payload is not valid JSON ({exc})",
-            errors=[{"loc": ["body"], "msg": "invalid JSON"}],
-        ) from None
+    return read_json(data, what="payload")
 
 
 def authenticate(session: Session, message: Message) -> Device:

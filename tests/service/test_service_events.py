@@ -301,3 +301,20 @@ def test_numbers_of_the_wrong_json_type_are_refused(client: TestClient) -> None:
     good = {"event_id": "type-ok", "occurred_at": now, "kind": "axle_count", "section": "AB",
             "axles": 12}  # fmt: skip
     assert client.post("/api/v1/events", json=good, headers=keys["A-ac"]).status_code == 201
+
+
+def test_a_key_sent_twice_in_one_object_is_refused(client: TestClient) -> None:
+    """``"axles": 1, "axles": 500`` stored 500 (found by the independent trial): which value the
+    device meant is unknown, so the event is refused and nothing stored."""
+    from tests.service.linekit import build_line
+
+    keys = build_line(client)
+    raw = ('{"event_id": "dup-key", "occurred_at": "2026-11-23T10:01:05Z", "kind": "axle_count",'
+           ' "section": "AB", "axles": 1, "axles": 500}')  # fmt: skip
+    headers = {**keys["A-ac"], "Content-Type": "application/json"}
+    answer = client.post("/api/v1/events", content=raw, headers=headers)
+    assert answer.status_code == 422, answer.text
+    assert "repeats the key 'axles'" in answer.json()["detail"]
+    utf16 = '{"kind": "heartbeat"}'.encode("utf-16")
+    answer = client.post("/api/v1/events", content=utf16, headers=headers)
+    assert answer.status_code == 422 and "UTF-8" in answer.json()["detail"], answer.text
