@@ -13,6 +13,13 @@ trap 'rm -rf "$work"' EXIT
 libpq=$(printf '%s' "$src" | sed 's/^postgresql+[a-z0-9]*:/postgresql:/')
 server=${libpq%/*}
 dst="$server/$target_db"
+src_db=${libpq##*/}
+src_db=${src_db%%\?*}
+if [ "$src_db" = "$target_db" ]; then
+    echo "depot: DEPOT_RESTORE_TEST_DB ($target_db) is the database being checked; the test drops" \
+        "and recreates its target, so name another database (default depot_restore_check)" >&2
+    exit 2
+fi
 
 psql -q -v ON_ERROR_STOP=1 "$server/postgres" -c "DROP DATABASE IF EXISTS \"$target_db\"" \
     -c "CREATE DATABASE \"$target_db\""
@@ -37,5 +44,9 @@ if ! diff -u "$work/images-source.txt" "$work/images-restored.txt"; then
     echo "depot: the restored image store differs from the source (diff above)" >&2; exit 1
 fi
 rows=$(awk '{ n += $2 } END { print n + 0 }' "$work/source.txt")
+if [ ! -s "$work/source.txt" ]; then
+    echo "depot: the source database has no tables; nothing was verified (is it migrated?)" >&2
+    exit 1
+fi
 echo "restore verified: $(wc -l < "$work/source.txt") tables, $rows rows, $(wc -l < "$work/images-source.txt") images into $target_db"
 psql -q "$server/postgres" -c "DROP DATABASE IF EXISTS \"$target_db\""

@@ -96,3 +96,17 @@ def test_a_damaged_backup_is_refused(source: dict[str, str], tmp_path: Path) -> 
     assert refused.returncode == 2
     assert "fails its checksums" in refused.stderr
     assert not (tmp_path / "restored").exists()  # nothing was half-restored
+
+
+def test_the_restore_test_never_drops_the_database_it_checks(source: dict[str, str]) -> None:
+    """With DEPOT_RESTORE_TEST_DB naming the source, the script dropped the live database and
+    called an empty result verified (found by the independent trial)."""
+    same = {**source, "DEPOT_RESTORE_TEST_DB": SOURCE_DB}
+    done = subprocess.run(
+        [DEPLOY / "restore-test.sh"], env=same, capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 2 and "is the database being checked" in done.stderr, done.stderr
+    admin = create_engine(source["DEPOT_DATABASE_URL"])
+    with admin.connect() as connection:  # the source is still there, rows and all
+        assert connection.execute(text("SELECT count(*) FROM raw_events")).scalar_one() > 0
+    admin.dispose()
