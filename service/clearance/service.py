@@ -180,6 +180,7 @@ def evaluate(
     session: Session, run: Run, section: Section, *, notes: list[str] | None = None
 ) -> dict[str, Any]:
     """Decide an arrived run from its evidence; the section follows when the run holds it."""
+    previous = run.verdict
     gathered = gather(session, run, section)
     decision = decide(gathered.evidence)
     verdict, reasons = decision.verdict, [*decision.reasons, *(notes or [])]
@@ -197,6 +198,10 @@ def evaluate(
         _set_state(section, next_state(section.state, verdict, section.mode), at)
         if section.state == "free":
             promote_conflict(session, section, at)
+    elif verdict == "incomplete" and previous != "incomplete":
+        # Late proof that an earlier train lost cars: they may still stand in the section the
+        # next train now holds (clearance.md: late evidence of incompleteness raises the alarm).
+        _set_state(section, next_state(section.state, verdict, section.mode), utcnow())
     session.flush()
     return {"run": run.id, "verdict": verdict, "reasons": reasons, "section_state": section.state}
 
@@ -262,7 +267,7 @@ def attach(
 ) -> dict[str, Any]:
     """Attach a piece of evidence to the run holding the section then; re-decide if arrived."""
     section = lock_section(session, section_id)
-    run = run_at(session, section_id, at)
+    run = run_at(session, section_id, at, station)
     # Departure-side devices see a train before it leaves; after the run has arrived they
     # are seeing the next train (a sweep train, say), which adopts their evidence on departure.
     if run is not None and run.arrived_at is not None and at > run.arrived_at:
