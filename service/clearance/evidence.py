@@ -105,18 +105,49 @@ def owing_devices(
     ]
 
 
+# Every report counts, not the last one: the verdict that weighs most for safety stands for
+# its side (an arrival ``absent`` above a ``present``; a departure ``present``, the reference
+# whose absence on arrival proves a loss, above the rest).
+TAIL_WEIGHT = {
+    "arrival": {"absent": 2, "present": 1, "uncertain": 0},
+    "departure": {"present": 2, "absent": 1, "uncertain": 0},
+}
+
+
 def _tail(snapshots: list[Snapshot], side: str) -> TailEvidence | None:
     mine = [s for s in snapshots if s.side == side and s.verdict is not None]
     if not mine:
         return None
-    latest = max(mine, key=lambda s: (s.occurred_at, s.id))
-    threshold = (latest.detection or {}).get("absent_confidence", DEFAULT_ABSENT_CONFIDENCE)
+    weight = TAIL_WEIGHT[side]
+    chosen = max(mine, key=lambda s: (weight[s.verdict or ""], s.score or 0.0, s.occurred_at, s.id))
+    threshold = (chosen.detection or {}).get("absent_confidence", DEFAULT_ABSENT_CONFIDENCE)
     return TailEvidence(
-        verdict=latest.verdict,  # type: ignore[arg-type]
-        score=float(latest.score or 0.0),
-        snapshot_id=latest.id,
+        verdict=chosen.verdict,  # type: ignore[arg-type]
+        score=float(chosen.score or 0.0),
+        snapshot_id=chosen.id,
         absent_confidence=float(threshold),
     )
+
+
+def contradictions(snapshots: list[Snapshot], readings: list[AxleReading]) -> list[str]:
+    """Reports of one side that disagree with each other: a person must look (rule 3) unless
+    one of them proves a loss (rule 1, decided before)."""
+    found = []
+    for side in ("departure", "arrival"):
+        seen = sorted(
+            (s for s in snapshots if s.side == side and s.verdict in ("present", "absent")),
+            key=lambda s: s.id,
+        )
+        if len({s.verdict for s in seen}) > 1:
+            shown = ", ".join(f"{s.verdict} (snapshot {s.id}, score {s.score or 0:.2f})" for s in seen)
+            found.append(f"the {side} images contradict each other: tail disc {shown}")
+        counts = sorted({r.axles for r in readings if r.side == side})
+        if len(counts) > 1:
+            found.append(
+                f"the {side} axle counts contradict each other:"
+                f" {', '.join(str(c) for c in counts)} axles reported"
+            )
+    return found
 
 
 def _car_label(passage: CarPassage) -> str | None:
@@ -160,9 +191,9 @@ def compare_families(
 def _axles(
     session: Session, readings: list[AxleReading], side: str, family_cars: list[str | None] | None
 ) -> int | None:
-    mine = [r for r in readings if r.side == side]
-    if mine:
-        return max(mine, key=lambda r: (r.occurred_at, r.id)).axles
+    mine = [r.axles for r in readings if r.side == side]
+    if mine:  # every count counts: the pair that would prove a loss (fewest arrived, most left)
+        return min(mine) if side == "arrival" else max(mine)
     if not family_cars or any(car is None or car.startswith("#") for car in family_cars):
         return None
     cars = [session.get(Car, car) for car in family_cars]
@@ -248,6 +279,7 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         arrival_axles=_axles(session, readings, "arrival", best.get("arrival")),
         stale_devices=tuple(sorted(stale)),
         eot=eot,
+        contradictions=tuple(contradictions(snapshots, readings)),
     )
     summary = {
         "tail": {
