@@ -12,6 +12,7 @@ from core.auth import Principal
 from core.database import utcnow
 from core.errors import Conflict, NotFound
 from core.models import Section
+from core.schemas import format_instant
 from ingest.models import Snapshot
 from service.clearance.evidence import EVIDENCE_WINDOW, gather, run_at, side_of
 from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run
@@ -176,16 +177,29 @@ def close_run(
     return evaluate(session, run, section, notes=notes)
 
 
+def time_contradictions(run: Run) -> list[str]:
+    """An arrival dated before its own departure: one of the two clocks is wrong, so no time
+    window of the run can be trusted. Kept (201, stored, never dropped) but never ``complete``:
+    derived from the run so that every re-decision keeps it."""
+    if run.arrived_at is None or run.arrived_at >= run.departed_at:
+        return []
+    return [
+        f"the arrival is dated {format_instant(run.arrived_at)}, before the departure at"
+        f" {format_instant(run.departed_at)}: a device clock is wrong; a person must look"
+    ]
+
+
 def evaluate(
     session: Session, run: Run, section: Section, *, notes: list[str] | None = None
 ) -> dict[str, Any]:
     """Decide an arrived run from its evidence; the section follows when the run holds it."""
     previous = run.verdict
+    notes = [*time_contradictions(run), *(notes or [])]
     gathered = gather(session, run, section)
     decision = decide(gathered.evidence)
     verdict, reasons = decision.verdict, [*decision.reasons, *(notes or [])]
     if notes and verdict == "complete":
-        verdict = "undetermined"  # a mismatched train number needs a person's eyes
+        verdict = "undetermined"  # a mismatched train number or clock needs a person's eyes
     if run.sweep and run.sweep_of is not None:
         reasons.append(describe_sweep(run.id, run.sweep_of, verdict))
     run.verdict, run.reasons, run.evidence = verdict, reasons, gathered.summary
