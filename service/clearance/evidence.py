@@ -139,7 +139,9 @@ def contradictions(snapshots: list[Snapshot], readings: list[AxleReading]) -> li
             key=lambda s: s.id,
         )
         if len({s.verdict for s in seen}) > 1:
-            shown = ", ".join(f"{s.verdict} (snapshot {s.id}, score {s.score or 0:.2f})" for s in seen)
+            shown = ", ".join(
+                f"{s.verdict} (snapshot {s.id}, score {s.score or 0:.2f})" for s in seen
+            )
             found.append(f"the {side} images contradict each other: tail disc {shown}")
         counts = sorted({r.axles for r in readings if r.side == side})
         if len(counts) > 1:

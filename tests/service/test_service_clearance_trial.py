@@ -3,7 +3,8 @@ belongs to another train, contradicts itself, or the arrival is dated before the
 
 from __future__ import annotations
 
-from datetime import timedelta
+from datetime import datetime, timedelta
+from typing import Any
 
 import pytest
 from fastapi.testclient import TestClient
@@ -30,10 +31,10 @@ def dispatcher(session: Session) -> dict[str, str]:
     return {"Authorization": f"Bearer {token}"}
 
 
-def run_of(line: Line, run: int) -> dict:
+def run_of(line: Line, run: int) -> dict[str, Any]:
     answer = line.client.get(f"/api/v1/runs/{run}", headers=ADMIN)
     assert answer.status_code == 200, answer.text
-    result: dict = answer.json()
+    result: dict[str, Any] = answer.json()
     return result
 
 
@@ -86,11 +87,11 @@ def test_a_late_absent_photo_of_the_cleared_run_raises_the_alarm(
     assert line.section()["state"] == "alarm"  # r1's lost cars: a person must look
 
 
-def count(line: Line, device: str, axles: int, at) -> None:  # type: ignore[no-untyped-def]
+def count(line: Line, device: str, axles: int, at: datetime) -> None:
     line.post(device, "axle_count", at, section="AB", axles=axles)
 
 
-def arrive_with_disc(line: Line) -> dict:
+def arrive_with_disc(line: Line) -> dict[str, Any]:
     line.heartbeat_all(ARRIVE - timedelta(seconds=30))
     line.snapshot("B-cam", ARRIVE - timedelta(seconds=5), jpeg(disc=True, seed=21))
     return line.arrive(ARRIVE)
