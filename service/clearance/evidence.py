@@ -36,16 +36,30 @@ DEFAULT_ABSENT_CONFIDENCE = CameraProfile().absent_confidence
 EOT_AFTER_ARRIVAL = timedelta(seconds=60)
 
 
-def run_at(session: Session, section: str, at: datetime) -> Run | None:
-    """The run holding ``section`` at time ``at`` (one train per section: the block's guarantee)."""
+def run_at(session: Session, section: str, at: datetime, station: str) -> Run | None:
+    """The run holding ``section`` at time ``at``, for evidence from a device at ``station``
+    (one train per section: the block's guarantee).
+
+    A run that holds the section at ``at`` (departed, not yet arrived) owns the evidence. Only
+    the departure station's devices see a train before its departure is reported, so only their
+    evidence may come up to :data:`EVIDENCE_WINDOW` before it; evidence dated before a run's
+    departure from anywhere else belongs to the earlier run whose window contains it, or to none.
+    """
     candidates = session.scalars(
         select(Run)
         .where(Run.section == section, Run.status != "conflict")
         .where(Run.departed_at <= at + EVIDENCE_WINDOW)
         .order_by(Run.departed_at.desc())
-        .limit(2)
+        .limit(3)
     ).all()
     for run in candidates:
+        if at < run.departed_at:
+            earlier_holds = any(
+                c.departed_at <= at and (c.arrived_at is None or at <= c.arrived_at)
+                for c in candidates
+            )
+            if station != run.from_station or earlier_holds:
+                continue
         if run.arrived_at is None or at <= run.arrived_at + EVIDENCE_WINDOW:
             return run
     return None
@@ -91,18 +105,51 @@ def owing_devices(
     ]
 
 
+# Every report counts, not the last one: the verdict that weighs most for safety stands for
+# its side (an arrival ``absent`` above a ``present``; a departure ``present``, the reference
+# whose absence on arrival proves a loss, above the rest).
+TAIL_WEIGHT = {
+    "arrival": {"absent": 2, "present": 1, "uncertain": 0},
+    "departure": {"present": 2, "absent": 1, "uncertain": 0},
+}
+
+
 def _tail(snapshots: list[Snapshot], side: str) -> TailEvidence | None:
     mine = [s for s in snapshots if s.side == side and s.verdict is not None]
     if not mine:
         return None
-    latest = max(mine, key=lambda s: (s.occurred_at, s.id))
-    threshold = (latest.detection or {}).get("absent_confidence", DEFAULT_ABSENT_CONFIDENCE)
+    weight = TAIL_WEIGHT[side]
+    chosen = max(mine, key=lambda s: (weight[s.verdict or ""], s.score or 0.0, s.occurred_at, s.id))
+    threshold = (chosen.detection or {}).get("absent_confidence", DEFAULT_ABSENT_CONFIDENCE)
     return TailEvidence(
-        verdict=latest.verdict,  # type: ignore[arg-type]
-        score=float(latest.score or 0.0),
-        snapshot_id=latest.id,
+        verdict=chosen.verdict,  # type: ignore[arg-type]
+        score=float(chosen.score or 0.0),
+        snapshot_id=chosen.id,
         absent_confidence=float(threshold),
     )
+
+
+def contradictions(snapshots: list[Snapshot], readings: list[AxleReading]) -> list[str]:
+    """Reports of one side that disagree with each other: a person must look (rule 3) unless
+    one of them proves a loss (rule 1, decided before)."""
+    found = []
+    for side in ("departure", "arrival"):
+        seen = sorted(
+            (s for s in snapshots if s.side == side and s.verdict in ("present", "absent")),
+            key=lambda s: s.id,
+        )
+        if len({s.verdict for s in seen}) > 1:
+            shown = ", ".join(
+                f"{s.verdict} (snapshot {s.id}, score {s.score or 0:.2f})" for s in seen
+            )
+            found.append(f"the {side} images contradict each other: tail disc {shown}")
+        counts = sorted({r.axles for r in readings if r.side == side})
+        if len(counts) > 1:
+            found.append(
+                f"the {side} axle counts contradict each other:"
+                f" {', '.join(str(c) for c in counts)} axles reported"
+            )
+    return found
 
 
 def _car_label(passage: CarPassage) -> str | None:
@@ -146,9 +193,9 @@ def compare_families(
 def _axles(
     session: Session, readings: list[AxleReading], side: str, family_cars: list[str | None] | None
 ) -> int | None:
-    mine = [r for r in readings if r.side == side]
-    if mine:
-        return max(mine, key=lambda r: (r.occurred_at, r.id)).axles
+    mine = [r.axles for r in readings if r.side == side]
+    if mine:  # every count counts: the pair that would prove a loss (fewest arrived, most left)
+        return min(mine) if side == "arrival" else max(mine)
     if not family_cars or any(car is None or car.startswith("#") for car in family_cars):
         return None
     cars = [session.get(Car, car) for car in family_cars]
@@ -234,6 +281,7 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         arrival_axles=_axles(session, readings, "arrival", best.get("arrival")),
         stale_devices=tuple(sorted(stale)),
         eot=eot,
+        contradictions=tuple(contradictions(snapshots, readings)),
     )
     summary = {
         "tail": {

@@ -86,6 +86,8 @@ class RunEvidence:
     arrival_axles: int | None = None
     stale_devices: tuple[str, ...] = field(default_factory=tuple)
     eot: EotEvidence | None = None
+    # Reports of one side that disagree with each other (in words); never ``complete``.
+    contradictions: tuple[str, ...] = field(default_factory=tuple)
 
 
 def _eot_last(evidence: RunEvidence) -> EotReading | None:
@@ -179,6 +181,7 @@ def _doubts(evidence: RunEvidence) -> list[str]:
     d_axles, a_axles = evidence.departure_axles, evidence.arrival_axles
     if d_axles is not None and a_axles is not None and a_axles > d_axles:
         doubts.append(f"{a_axles} axles arrived but only {d_axles} departed: the counts disagree")
+    doubts.extend(evidence.contradictions)
     for device in evidence.stale_devices:
         doubts.append(
             f"device {device} is silent past its heartbeat deadline; its evidence is missing"

@@ -12,6 +12,7 @@ from core.auth import Principal
 from core.database import utcnow
 from core.errors import Conflict, NotFound
 from core.models import Section
+from core.schemas import format_instant
 from ingest.models import Snapshot
 from service.clearance.evidence import EVIDENCE_WINDOW, gather, run_at, side_of
 from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run
@@ -176,15 +177,29 @@ def close_run(
     return evaluate(session, run, section, notes=notes)
 
 
+def time_contradictions(run: Run) -> list[str]:
+    """An arrival dated before its own departure: one of the two clocks is wrong, so no time
+    window of the run can be trusted. Kept (201, stored, never dropped) but never ``complete``:
+    derived from the run so that every re-decision keeps it."""
+    if run.arrived_at is None or run.arrived_at >= run.departed_at:
+        return []
+    return [
+        f"the arrival is dated {format_instant(run.arrived_at)}, before the departure at"
+        f" {format_instant(run.departed_at)}: a device clock is wrong; a person must look"
+    ]
+
+
 def evaluate(
     session: Session, run: Run, section: Section, *, notes: list[str] | None = None
 ) -> dict[str, Any]:
     """Decide an arrived run from its evidence; the section follows when the run holds it."""
+    previous = run.verdict
+    notes = [*time_contradictions(run), *(notes or [])]
     gathered = gather(session, run, section)
     decision = decide(gathered.evidence)
     verdict, reasons = decision.verdict, [*decision.reasons, *(notes or [])]
     if notes and verdict == "complete":
-        verdict = "undetermined"  # a mismatched train number needs a person's eyes
+        verdict = "undetermined"  # a mismatched train number or clock needs a person's eyes
     if run.sweep and run.sweep_of is not None:
         reasons.append(describe_sweep(run.id, run.sweep_of, verdict))
     run.verdict, run.reasons, run.evidence = verdict, reasons, gathered.summary
@@ -197,6 +212,10 @@ def evaluate(
         _set_state(section, next_state(section.state, verdict, section.mode), at)
         if section.state == "free":
             promote_conflict(session, section, at)
+    elif verdict == "incomplete" and previous != "incomplete":
+        # Late proof that an earlier train lost cars: they may still stand in the section the
+        # next train now holds (clearance.md: late evidence of incompleteness raises the alarm).
+        _set_state(section, next_state(section.state, verdict, section.mode), utcnow())
     session.flush()
     return {"run": run.id, "verdict": verdict, "reasons": reasons, "section_state": section.state}
 
@@ -262,7 +281,7 @@ def attach(
 ) -> dict[str, Any]:
     """Attach a piece of evidence to the run holding the section then; re-decide if arrived."""
     section = lock_section(session, section_id)
-    run = run_at(session, section_id, at)
+    run = run_at(session, section_id, at, station)
     # Departure-side devices see a train before it leaves; after the run has arrived they
     # are seeing the next train (a sweep train, say), which adopts their evidence on departure.
     if run is not None and run.arrived_at is not None and at > run.arrived_at:

@@ -54,7 +54,7 @@ def tail_snapshot(d: Derivation) -> dict[str, Any]:
     profile = camera_profile(d.device.id)
     result = tail_check.detect(image, profile)
     # On an arrival image, the same run's departure image (if any) is the reference.
-    run = run_at(d.session, event.section, event.occurred_at)
+    run = run_at(d.session, event.section, event.occurred_at, d.device.station)
     arriving = run is not None and side_of(run, d.device.station) == "arrival"
     reference = _departure_reference(d, run.id) if run is not None and arriving else None
     detection: dict[str, Any] = result.to_dict()
