@@ -10,6 +10,7 @@ import warnings
 from collections.abc import Sequence
 from datetime import datetime
 
+from pydantic import ValidationError
 from sqlalchemy.exc import IntegrityError
 
 from core.database import get_sessionmaker, utcnow
@@ -224,6 +225,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         return fail(exc.detail)
     except IntegrityError as exc:
         return fail(f"the database refused the change ({exc.orig})")
+    except ValidationError as exc:
+        if exc.title != "Settings":
+            raise
+        return fail(settings_problem(exc))
+
+
+def settings_problem(exc: ValidationError) -> str:
+    """The settings' errors in words, never with the values given: a pydantic message quotes
+    its input, and the input of the settings holds the admin and metrics tokens."""
+    lines = []
+    for error in exc.errors(include_input=False, include_url=False):
+        message = error["msg"].removeprefix("Value error, ")
+        field = "_".join(str(part) for part in error["loc"]).upper()
+        lines.append(f"DEPOT_{field}: {message}" if field else message)
+    return "invalid settings: " + "; ".join(lines)
 
 
 if __name__ == "__main__":

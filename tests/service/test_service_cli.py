@@ -119,3 +119,25 @@ def test_demo_prints_a_summary_not_every_request(cli_data_dir: Path) -> None:
     assert len(lines) <= 3, lines[:10]
     assert "HTTP Request" not in done.stderr and "Warning" not in done.stderr, done.stderr
     assert re.search(r"demo: \d{3,} requests through the API, all answered 2xx", done.stdout)
+
+
+def test_a_settings_error_never_prints_the_tokens(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """pydantic quoted the settings' input, half the admin token included, on stderr (found by
+    the independent trial); the message names the setting and the fix, one line, depot: prefix."""
+    from core.settings import get_settings
+
+    token = "Zq7" * 15
+    monkeypatch.setenv("DEPOT_ENVIRONMENT", "production")
+    monkeypatch.setenv("DEPOT_ADMIN_TOKEN", token)
+    monkeypatch.setenv("DEPOT_METRICS_TOKEN", "m3tr1cs" * 5)
+    monkeypatch.delenv("DEPOT_DATABASE_URL", raising=False)
+    get_settings.cache_clear()
+    try:
+        assert main(["user", "list"]) == 2
+    finally:
+        get_settings.cache_clear()
+    err = capsys.readouterr().err
+    assert err.startswith("depot: invalid settings:") and "PostgreSQL" in err, err
+    assert "Zq7Zq7" not in err and "m3tr1cs" not in err and "Traceback" not in err, err
