@@ -16,8 +16,9 @@ from sqlalchemy import func, or_, select
 from sqlalchemy.orm import Session
 
 from core import metrics
+from core.auth import device_for_key, person_for_token
 from core.database import DbSession, utcnow
-from core.errors import Unauthorized
+from core.errors import Forbidden, Unauthorized
 from core.models import Device, Section
 from core.settings import get_settings
 from service.clearance.views import QUEUE_STATES
@@ -29,15 +30,24 @@ PROMETHEUS_TEXT = "text/plain; version=0.0.4; charset=utf-8"
 OCCASIONAL_KINDS = ("marking_station", "test_bench", "onboard_unit")
 
 
-def _authorised(request: Request) -> None:
+def _authorised(request: Request, session: Session) -> None:
+    """The admin token or DEPOT_METRICS_TOKEN; anyone else known (a person, a device) is 403,
+    as on every other route, and unknown credentials are 401."""
     settings = get_settings()
     given = request.headers.get("authorization", "")
     scheme, _, token = given.partition(" ")
     accepted = [settings.admin_token, *([settings.metrics_token] if settings.metrics_token else [])]
-    if scheme.lower() != "bearer" or not any(
+    if scheme.lower() == "bearer" and any(
         hmac.compare_digest(token.encode(), secret.encode()) for secret in accepted
     ):
-        raise Unauthorized("send the admin token or DEPOT_METRICS_TOKEN as a bearer token")
+        return
+    device_key = request.headers.get("x-device-key")
+    known = (scheme.lower() == "bearer" and person_for_token(session, token) is not None) or (
+        device_key is not None and device_for_key(session, device_key) is not None
+    )
+    if known:
+        raise Forbidden("/metrics is for the admin token or DEPOT_METRICS_TOKEN")
+    raise Unauthorized("send the admin token or DEPOT_METRICS_TOKEN as a bearer token")
 
 
 def _gauge(name: str, help_text: str, samples: dict[str, float], label: str = "") -> list[str]:
@@ -69,8 +79,8 @@ def database_gauges(session: Session) -> list[str]:
     ]
 
 
-@router.get("/metrics", response_class=PlainTextResponse, responses={401: {}})
+@router.get("/metrics", response_class=PlainTextResponse, responses={401: {}, 403: {}})
 def prometheus_metrics(request: Request, session: DbSession) -> PlainTextResponse:
     """Prometheus text exposition (version 0.0.4)."""
-    _authorised(request)
+    _authorised(request, session)
     return PlainTextResponse(metrics.render(database_gauges(session)), media_type=PROMETHEUS_TEXT)

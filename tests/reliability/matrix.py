@@ -67,4 +67,5 @@ ENDPOINTS: list[tuple[str, str, frozenset[str]]] = [
     ("GET", "/api/v1/trains/{train}/position", READERS),
     ("POST", "/api/v1/markers", ADMIN_ONLY),
     ("GET", "/api/v1/markers", READERS),
+    ("GET", "/metrics", ADMIN_ONLY),  # or DEPOT_METRICS_TOKEN (test_service_metrics.py)
 ]
