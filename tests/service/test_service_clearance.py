@@ -4,29 +4,14 @@ from __future__ import annotations
 
 from datetime import timedelta
 
-import pytest
 from fastapi.testclient import TestClient
-from sqlalchemy.orm import Session
 
-from service.setup.service import create_user
 from tests.conftest import ADMIN
 from tests.service.clock import ServerClock, server_clock  # noqa: F401 (fixture)
 from tests.service.linekit import build_line
 from tests.service.scenario import T0, Line, jpeg
 
 ARRIVE = T0 + timedelta(minutes=20)
-
-
-@pytest.fixture
-def line(client: TestClient) -> Line:
-    return Line(client, build_line(client))
-
-
-@pytest.fixture
-def dispatcher(session: Session) -> dict[str, str]:
-    token = create_user(session, "olena", "dispatcher")
-    session.commit()
-    return {"Authorization": f"Bearer {token}"}
 
 
 def complete_passage(

@@ -14,24 +14,10 @@ from sqlalchemy.orm import Session
 from core.auth import Principal
 from service.clearance.models import AuditRecord
 from service.clearance.views import audit_out
-from service.setup.service import create_user
 from tests.conftest import ADMIN
-from tests.service.linekit import build_line
 from tests.service.scenario import T0, Line
 
 ARRIVE = T0 + timedelta(minutes=20)
-
-
-@pytest.fixture
-def line(client: TestClient) -> Line:
-    return Line(client, build_line(client))
-
-
-@pytest.fixture
-def dispatcher(session: Session) -> dict[str, str]:
-    token = create_user(session, "olena", "dispatcher")
-    session.commit()
-    return {"Authorization": f"Bearer {token}"}
 
 
 def arrived_for_review(line: Line) -> int:

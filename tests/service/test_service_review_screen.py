@@ -7,21 +7,14 @@ import io
 import re
 import wave
 
-import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import text
 from sqlalchemy.orm import Session
 
 from service.setup.service import create_user
 from tests.conftest import ADMIN
-from tests.service.linekit import build_line
 from tests.service.reviewkit import alarm_run, late_photo_without_disc, review_run
 from tests.service.scenario import T0, Line
-
-
-@pytest.fixture
-def line(client: TestClient) -> Line:
-    return Line(client, build_line(client))
 
 
 def login(client: TestClient, session: Session, name: str = "olena") -> str:

@@ -5,24 +5,17 @@ from __future__ import annotations
 from datetime import timedelta
 from typing import Any
 
-import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy.orm import Session
 
 from service.replay import replay
 from tests.conftest import ADMIN
-from tests.service.linekit import build_line
 from tests.service.scenario import T0, Line, iso, jpeg
 
 ARRIVE = T0 + timedelta(minutes=20)
 LATER = ARRIVE + timedelta(minutes=10)
 # PROVENANCE of shared/data/real/eot_radio: unit 39572, 89 psig, marker light on.
 PACKET = "11100010010111100000101001010110010100110101001011101011011001110010101001"
-
-
-@pytest.fixture
-def line(client: TestClient) -> Line:
-    return Line(client, build_line(client))
 
 
 def decide(line: Line, run: int, action: str, reason: str = "cannot prove it empty") -> Any:
