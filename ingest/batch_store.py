@@ -43,7 +43,7 @@ def _validated(
                 check_section(session, device, section)
                 sections_ok.add(section)
             check_derivable(session, event)
-        except (Unprocessable, Forbidden) as exc:
+        except (Unprocessable, Forbidden, Conflict) as exc:
             results[index] = _rejected(
                 item.get("event_id") if isinstance(item, dict) else None, exc
             )

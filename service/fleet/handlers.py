@@ -9,13 +9,16 @@ from sqlalchemy.orm import Session
 from core.models import Car
 from ingest.handlers import Derivation
 from service.fleet.rules import refuse_implausible, registered, value_problems
-from service.fleet.service import record_measurements
+from service.fleet.service import is_repeated_test, record_measurements
 
 
 def measurement_values(session: Session, event: Any) -> None:
     """The validator of ``measurement`` events: every value names a registered parameter and
-    is plausible, as for the API and the CSV import; else 422 and nothing is stored."""
+    is plausible, as for the API and the CSV import; else 422 and nothing is stored. Other
+    values for a test the car already has at that time are 409, as on the API."""
     refuse_implausible(registered(session), event.values)
+    if session.get(Car, event.car) is not None:
+        is_repeated_test(session, event.car, event.occurred_at, event.values)
 
 
 def measurement(d: Derivation) -> dict[str, Any]:
@@ -32,6 +35,8 @@ def measurement(d: Derivation) -> dict[str, Any]:
         # Only on replay of an event stored before the values were checked at the door (or
         # before a parameter's range was narrowed): the raw event is kept, nothing derived.
         return {"car": car_id, "measurements": 0, "refused": refused}
+    if is_repeated_test(d.session, car_id, d.event.occurred_at, d.event.values):
+        return {"car": car_id, "measurements": 0, "note": "this test is already stored"}
     stored = record_measurements(
         d.session,
         car_id,

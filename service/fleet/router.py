@@ -9,8 +9,7 @@ from fastapi.responses import Response
 
 from core.auth import CurrentEngineer, CurrentReader
 from core.database import DbSession, utcnow
-from core.errors import Conflict, NotFound
-from core.schemas import format_instant
+from core.errors import NotFound
 from service.fleet import service, views
 from service.fleet.chart import cached_chart
 from service.fleet.forecasts import ForecastOptions, run_forecasts
@@ -60,22 +59,11 @@ def post_measurements(
     service.require_car(session, car_id)
     refuse_implausible(registered(session), body.values)
     answer = {"car": car_id, "taken_at": body.taken_at.isoformat()}
-    before = service.stored_test(session, car_id, body.taken_at)
-    if before is not None:
-        if before != body.values:
-            raise Conflict(
-                f"car {car_id} already has a test at {format_instant(body.taken_at)} with other"
-                f" values ({_listed(before)}); a test is not rewritten: send its correct time,"
-                " or ask an engineer to correct the stored test"
-            )
+    if service.is_repeated_test(session, car_id, body.taken_at, body.values):
         response.status_code = 200
         return {**answer, "measurements": 0, "status": "duplicate"}
     stored = service.record_measurements(session, car_id, body.taken_at, body.values, source="api")
     return {**answer, "measurements": stored, "status": "created"}
-
-
-def _listed(values: dict[str, float]) -> str:
-    return ", ".join(f"{name} = {value:g}" for name, value in sorted(values.items()))
 
 
 @router.get("/maintenance/parameters", response_model=list[ParameterOut])

@@ -19,6 +19,7 @@ from sqlalchemy.orm import Session
 from core.auth import Principal
 from core.errors import Conflict, NotFound, Unprocessable
 from core.models import Car
+from core.schemas import format_instant
 from service.fleet.models import (
     MaintenanceOverride,
     Measurement,
@@ -124,6 +125,25 @@ def stored_test(session: Session, car_id: str, taken_at: datetime) -> dict[str, 
     for row in rows:  # tests stored at the same time merge, as the forecast reads them
         values.update(measured_values(session, row))
     return values
+
+
+def is_repeated_test(
+    session: Session, car_id: str, taken_at: datetime, values: dict[str, float]
+) -> bool:
+    """Whether the car already has this very test (True: store nothing again); 409 when it has
+    a test at ``taken_at`` with other values — a test is never silently rewritten, whether it
+    comes through the API or as a ``measurement`` event."""
+    before = stored_test(session, car_id, taken_at)
+    if before is None:
+        return False
+    if before != values:
+        listed = ", ".join(f"{name} = {value:g}" for name, value in sorted(before.items()))
+        raise Conflict(
+            f"car {car_id} already has a test at {format_instant(taken_at)} with other values"
+            f" ({listed}); a test is not rewritten: send its correct time, or ask an engineer"
+            " to correct the stored test"
+        )
+    return True
 
 
 def list_parameters(session: Session) -> list[Parameter]:

@@ -186,6 +186,28 @@ def test_refused_event_values_answer_422_and_store_nothing(
     assert _count(session) == 1
 
 
+def test_an_event_never_rewrites_a_stored_test(
+    keys: dict, client: TestClient, session: Session
+) -> None:
+    """A ``measurement`` event with other values at a stored test's time was stored beside it
+    (found by the second independent trial); the same rule as the API: 409, nothing stored,
+    and the very same test again stores nothing twice."""
+    first = event("t-1", "measurement", at=T0.isoformat(), car="0117", values={"door_close_s": 3.1})
+    assert client.post("/api/v1/events", json=first, headers=keys["D-bench"]).status_code == 201
+    other = {**first, "event_id": "t-2", "values": {"door_close_s": 3.45}}
+    answer = client.post("/api/v1/events", json=other, headers=keys["D-bench"])
+    assert answer.status_code == 409, answer.text
+    assert "already has a test" in answer.json()["detail"]
+    again = {**first, "event_id": "t-3"}
+    assert client.post("/api/v1/events", json=again, headers=keys["D-bench"]).status_code == 201
+    assert _count(session) == 1
+    batch = {"events": [{**other, "event_id": "t-4"}, {**first, "event_id": "t-5"}]}
+    results = client.post("/api/v1/events", json=batch, headers=keys["D-bench"]).json()["results"]
+    assert [r["status"] for r in results] == ["rejected", "created"]
+    assert results[0]["error"]["status"] == 409
+    assert _count(session) == 1
+
+
 # (e) an inverted plausible range ----------------------------------------------------------
 
 
