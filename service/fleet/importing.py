@@ -92,6 +92,13 @@ def _header(reader: Iterator[list[str]]) -> list[str]:
             f"the CSV lacks the column(s) {', '.join(missing)}; the first line must be a header"
             f" like {EXAMPLE} (or car,taken_at,parameter,value)"
         )
+    repeated = sorted({name for name in header if name and header.count(name) > 1})
+    if repeated:
+        # Two cells under one name: which is the test's value is unknown, so nothing is read.
+        raise Unprocessable(
+            f"line 1 names the column(s) {', '.join(repeated)} more than once; give each"
+            " parameter one column"
+        )
     return header
 
 

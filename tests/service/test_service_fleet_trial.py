@@ -89,6 +89,12 @@ def test_value_under_an_unnamed_column_is_refused(keys: dict, session: Session) 
     assert "line 2, column 4" in detail and "decimal comma" in detail, detail
 
 
+def test_a_column_named_twice_is_refused(keys: dict, session: Session) -> None:
+    """Only the second of two door_close_s cells was stored, silently (second trial)."""
+    text = "car,taken_at,door_close_s,door_close_s\n0117,2026-11-10T08:00:00Z,3.1,3.3\n"
+    assert "door_close_s more than once" in _parse(session, text)
+
+
 def test_semicolon_separated_file_is_named(keys: dict, session: Session) -> None:
     detail = _parse(session, "car;taken_at;door_close_s\n0117;2026-11-01T07:30:00Z;2,5\n")
     assert "';'" in detail and "decimal" in detail, detail
