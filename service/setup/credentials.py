@@ -18,6 +18,7 @@ from core.auth import device_cache, hash_secret, new_secret
 from core.database import utcnow
 from core.errors import Conflict, NotFound, Unprocessable
 from core.models import ROLES, CredentialChange, Device, User
+from core.schemas import format_instant
 from service.setup.names import DEVICE_ID, USER_NAME
 
 
@@ -82,7 +83,14 @@ def rotate_user(
     user.token_hash = hash_secret(token)
     if expires_in_days is not None:  # else the new token keeps the old one's expiry
         user.expires_at = _expiry(expires_in_days)
-    record_change(session, actor, "user_rotated", "user", name)
+    elif user.expires_at is not None and user.expires_at <= utcnow():
+        # Keeping a past expiry would hand out a token that is dead on arrival.
+        raise Unprocessable(
+            f"user {name!r}'s token expired at {format_instant(user.expires_at)}; give"
+            " the new token an expiry (--expires-in-days N, or expires_in_days in the body)"
+        )
+    detail = "" if expires_in_days is None else f"expires in {expires_in_days:g} days"
+    record_change(session, actor, "user_rotated", "user", name, detail)
     session.flush()
     return user, token
 

@@ -128,6 +128,30 @@ def test_rotation_keeps_the_expiry_unless_a_new_one_is_given(
     assert longer["expires_at"] > added["expires_at"]
 
 
+def test_rotating_an_expired_token_needs_a_new_expiry(client: TestClient, session: Session) -> None:
+    """Found by the second trial: the new token kept the past expiry, dead on arrival."""
+    from datetime import timedelta
+
+    from core.database import utcnow
+    from core.models import User
+
+    body = {"name": "taras", "role": "dispatcher", "expires_in_days": 1}
+    assert client.post("/api/v1/users", json=body, headers=ADMIN).status_code == 201
+    user = session.query(User).filter_by(name="taras").one()
+    user.expires_at = utcnow() - timedelta(hours=1)
+    session.commit()
+    refused = client.post("/api/v1/users/taras/rotate", headers=ADMIN)
+    assert refused.status_code == 422 and "expires_in_days" in refused.json()["detail"]
+    renewed = client.post("/api/v1/users/taras/rotate", json={"expires_in_days": 7}, headers=ADMIN)
+    assert renewed.status_code == 200, renewed.text
+    token = renewed.json()["token"]
+    assert (
+        client.get("/api/v1/runs", headers={"Authorization": f"Bearer {token}"}).status_code == 200
+    )
+    changes = client.get("/api/v1/credential-changes?subject=taras", headers=ADMIN).json()
+    assert changes[0]["action"] == "user_rotated" and "7 days" in changes[0]["detail"]
+
+
 def test_registering_a_device_is_audited(client: TestClient) -> None:
     """Found by the independent trial: the key issued at registration left no audit record."""
     build_line(client)
