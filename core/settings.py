@@ -105,8 +105,12 @@ class Settings(BaseSettings):
             raise ValueError(
                 "DEPOT_ADMIN_TOKEN must be set to a secret of at least 24 characters in production"
             )
-        if not self.database_url or self.database_url.startswith("sqlite"):
-            raise ValueError("DEPOT_DATABASE_URL must point to PostgreSQL in production")
+        if not (self.database_url or "").startswith("postgresql"):
+            # SQLite is for one station's trial; any other engine is not supported at all.
+            raise ValueError(
+                "DEPOT_DATABASE_URL must point to PostgreSQL in production"
+                " (postgresql+psycopg://USER@HOST/DB)"
+            )
         return self
 
     @property

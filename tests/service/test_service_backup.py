@@ -110,3 +110,23 @@ def test_the_restore_test_never_drops_the_database_it_checks(source: dict[str, s
     with admin.connect() as connection:  # the source is still there, rows and all
         assert connection.execute(text("SELECT count(*) FROM raw_events")).scalar_one() > 0
     admin.dispose()
+
+
+def test_a_backup_whose_checksums_leave_a_part_out_is_refused(
+    source: dict[str, str], tmp_path: Path
+) -> None:
+    """SHA256SUMS listing only the dump let a truncated images.tar through (second trial)."""
+    made = subprocess.run(
+        [DEPLOY / "backup.sh", tmp_path / "backups"], env=source, capture_output=True, text=True
+    )
+    backup = Path(made.stdout.strip())
+    sums = backup / "SHA256SUMS"
+    sums.write_text("".join(x for x in sums.read_text().splitlines(True) if "database" in x))
+    with (backup / "images.tar").open("r+b") as archive:
+        archive.truncate(100)
+    target = {**source, "DEPOT_DATA_DIR": str(tmp_path / "restored")}
+    refused = subprocess.run(
+        [DEPLOY / "restore.sh", backup], env=target, capture_output=True, text=True
+    )
+    assert refused.returncode == 2 and "does not list images.tar" in refused.stderr
+    assert not (tmp_path / "restored").exists()

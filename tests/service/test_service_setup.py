@@ -90,6 +90,10 @@ def test_production_refuses_unsafe_defaults() -> None:
         Settings(environment="production", admin_token="dev-admin-token")
     with pytest.raises(ValidationError, match="PostgreSQL"):
         Settings(environment="production", admin_token="x" * 32)
+    # found by the second trial: MySQL started and answered 500 on every request
+    for other in ("mysql://u:p@127.0.0.1/x", "sqlite:///depot.db"):
+        with pytest.raises(ValidationError, match="PostgreSQL"):
+            Settings(environment="production", admin_token="x" * 32, database_url=other)
     safe = Settings(
         environment="production", admin_token="x" * 32, database_url="postgresql+psycopg://db/depot"
     )
