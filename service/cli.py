@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from datetime import datetime
 
 from pydantic import ValidationError
-from sqlalchemy.exc import IntegrityError
+from sqlalchemy.exc import ArgumentError, IntegrityError, NoSuchModuleError, OperationalError
 
 from core.database import get_sessionmaker, utcnow
 from core.errors import DepotError
@@ -229,6 +229,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         if exc.title != "Settings":
             raise
         return fail(settings_problem(exc))
+    except (OperationalError, NoSuchModuleError, ArgumentError) as exc:
+        first = str(getattr(exc, "orig", None) or exc).strip().splitlines()[0]
+        return fail(
+            f"the database cannot be used ({first}); check DEPOT_DATABASE_URL"
+            " (postgresql+psycopg://USER@HOST/DB, or unset for SQLite under DEPOT_DATA_DIR)"
+            " and that it is migrated (depot migrate)"
+        )
 
 
 def settings_problem(exc: ValidationError) -> str:

@@ -141,3 +141,31 @@ def test_a_settings_error_never_prints_the_tokens(
     err = capsys.readouterr().err
     assert err.startswith("depot: invalid settings:") and "PostgreSQL" in err, err
     assert "Zq7Zq7" not in err and "m3tr1cs" not in err and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize(
+    "url",
+    ["postgresql+psycopg://postgres@127.0.0.1:1/none", "postgres://x@y/z"],
+    ids=["unreachable", "unknown-scheme"],
+)
+def test_a_database_that_cannot_be_used_is_one_clear_line(
+    url: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A SQLAlchemy traceback with no hint (found by the second trial) is now one depot: line
+    that names the setting and the fix."""
+    from core.database import get_engine, get_sessionmaker
+    from core.settings import get_settings
+
+    def forget() -> None:
+        for cached in (get_settings, get_engine, get_sessionmaker):
+            cached.cache_clear()
+
+    monkeypatch.setenv("DEPOT_DATABASE_URL", url)
+    forget()
+    try:
+        assert main(["user", "list"]) == 2
+    finally:
+        forget()
+    err = capsys.readouterr().err
+    assert err.startswith("depot: the database cannot be used") and "DEPOT_DATABASE_URL" in err
+    assert "Traceback" not in err
