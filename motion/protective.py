@@ -33,7 +33,7 @@ def braking_distance(
         raise ValueError("speed and reaction time must be non-negative")
     a = deceleration_mps2 + G * gradient_permille / 1000.0
     if a <= 0:
-        raise ValueError("the downhill gradient overcomes the deceleration")
+        raise ValueError(_no_braking(deceleration_mps2, gradient_permille))
     return speed_mps * reaction_time_s + speed_mps**2 / (2 * a)
 
 
@@ -135,10 +135,20 @@ def max_safe_speed(
     em = errors or ErrorModel()
     a = deceleration_mps2 + G * gradient_permille / 1000.0
     if a <= 0:
-        raise ValueError("the downhill gradient overcomes the deceleration")
+        raise ValueError(_no_braking(deceleration_mps2, gradient_permille))
     room = measured_distance_m - em.delta_s_max_m - em.delta_l_max_m
     if room <= 0:
         return 0.0
     lin = reaction_time_s + em.measurements * em.measurement_time_s
     # V²/(2a) + lin·V - room = 0
     return float(-lin * a + math.sqrt((lin * a) ** 2 + 2 * a * room))
+
+
+def _no_braking(deceleration_mps2: float, gradient_permille: float) -> str:
+    """Why the net deceleration is not positive, in the terms the caller gave."""
+    if deceleration_mps2 <= 0:
+        return f"the braking deceleration must be positive (got {deceleration_mps2:g} m/s²)"
+    return (
+        f"the downhill gradient ({gradient_permille:g} ‰) overcomes the braking deceleration"
+        f" ({deceleration_mps2:g} m/s²): the train would not stop"
+    )
