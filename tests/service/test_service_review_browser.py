@@ -158,4 +158,8 @@ def test_screen_updates_in_place_keeps_the_draft_alerts_and_turns_stale(
         # the server is stopped: within twice the period the page must say it is stale
         expect(page.locator("#stale-banner")).to_be_visible(timeout=2 * within + 1000)
         expect(page.locator("body")).to_have_class(re.compile("stale"))
+        # and its decisions wait until it is current again (found by the second trial)
+        assert page.locator("button.act").count() > 0
+        for button in page.locator("button.act").all():
+            expect(button).to_be_disabled()
         browser.close()

@@ -127,6 +127,11 @@
     var stale = Date.now() - lastOk > 2 * period;
     body.classList.toggle("stale", stale);
     banner.hidden = !stale;
+    // A decision taken on a screen that stopped updating is taken on old evidence: the
+    // action buttons wait until the screen is current again.
+    document.querySelectorAll("button.act").forEach(function (button) {
+      button.disabled = stale;
+    });
   }
 
   document.addEventListener("submit", function (event) {
