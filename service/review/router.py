@@ -107,14 +107,18 @@ def _context(screen: Screen, who: Principal) -> dict[str, Any]:
 def review(
     request: Request,
     session: DbSession,
-    run: Annotated[int | None, Query(ge=1, le=MAX_ROW_ID)] = None,
+    run: Annotated[str | None, Query(max_length=32)] = None,
 ) -> Response:
     who = _who(request, session)
     if who is None:
         return RedirectResponse("/review/login", status_code=303)
-    screen = build_screen(session, run_id=run, now=utcnow(), role=who.role)
+    # A person types or edits this URL: a wrong run is said on the page, not answered as JSON.
+    run_id = int(run) if run and run.isdigit() and 1 <= int(run) <= MAX_ROW_ID else None
+    screen = build_screen(session, run_id=run_id, now=utcnow(), role=who.role)
     context = _context(screen, who)
     context["flash"] = sessions.take_flash(session, request.cookies.get(COOKIE))
+    if run and (screen.run is None or screen.run["id"] != run_id):
+        context["flash"] = (f"There is no run {run!r}; showing the queue instead.", "error")
     return templates.TemplateResponse(request, "review.html", context)
 
 

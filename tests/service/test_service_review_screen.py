@@ -7,6 +7,7 @@ import io
 import re
 import wave
 
+import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import text
 from sqlalchemy.orm import Session
@@ -64,6 +65,18 @@ def test_text_from_the_url_is_never_shown_as_a_message(
     login(client, session)
     page = client.get("/review", params={"notice": "Section AB cleared by the system"}).text
     assert "cleared by the system" not in page
+
+
+@pytest.mark.parametrize("run", ["abc", "0", "999999", "1e3"])
+def test_a_wrong_run_in_the_url_is_said_on_the_page(
+    run: str, client: TestClient, session: Session
+) -> None:
+    """``?run=abc`` answered a JSON 422 on an HTML page and ``?run=999999`` nothing at all
+    (found by the second trial): the page says so and shows the queue."""
+    login(client, session)
+    page = client.get("/review", params={"run": run})
+    assert page.status_code == 200 and page.headers["content-type"].startswith("text/html")
+    assert f"There is no run &#39;{run}&#39;" in page.text, page.text[:500]
 
 
 def test_decision_message_comes_from_the_session_once(
