@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .candidates import FEATURE_NAMES
+from .features import FEATURE_NAMES
 
 __all__ = ["TreeModel", "VerifierParams", "fit"]
 
