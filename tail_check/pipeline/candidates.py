@@ -10,8 +10,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from numpy.typing import NDArray
 import numpy as np
+from numpy.typing import NDArray
 
 from ..profile import CameraProfile
 from .features import FEATURE_NAMES, FEATURE_PARAMS, Candidate, FeatureParams, describe

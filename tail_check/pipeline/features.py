@@ -55,6 +55,8 @@ FEATURE_NAMES: tuple[str, ...] = (
     "source",
     "scene_bright",
     "scene_red_share",
+    *(f"{m}_r{i}" for m in ("redness", "value", "chroma") for i in range(6)),
+    *(f"{m}_sector_std_r{i}" for m in ("evidence",) for i in range(6)),
 )
 """Names of the feature vector, in order."""
 
@@ -66,20 +68,24 @@ class FeatureParams:
     Attributes
     ----------
     window : half-side of the segmentation window, in proposal radii.
-    inner, rim, ring : (from, to) radii of the inside, rim and outer-ring zones.
-    sectors : sectors of the outer ring for the all-sides contrast.
-    centre : radius of the centre zone (the reflector), in radii.
+    radial : edges of the rings around the region's circle (a rotation-invariant
+        picture of reflector, paint, rim and surroundings); each ring is also split
+        into ``sectors`` (a disc stands out on every side; a stripe or stroke crosses
+        only some of them).
+    inside_rings, rim_ring, outer_rings : which rings are the inside, the rim and the
+        outer ring of the contrast features.
+    sectors : sectors per ring.
     red_pixel : redness above which a pixel counts for the scene's red share.
     samples_per_radius : zones of large candidates are sampled on a grid this many
         points per radius (bounded cost at any size).
     """
 
     window: float = 2.6
-    inner: tuple[float, float] = (0.0, 0.75)
-    rim: tuple[float, float] = (0.9, 1.25)
-    ring: tuple[float, float] = (1.4, 2.2)
+    radial: tuple[float, ...] = (0.0, 0.3, 0.75, 1.0, 1.3, 1.7, 2.2)
+    inside_rings: tuple[int, ...] = (0, 1)
+    rim_ring: int = 3
+    outer_rings: tuple[int, ...] = (4, 5)
     sectors: int = 8
-    centre: float = 0.3
     red_pixel: float = 0.35
     samples_per_radius: float = 6.0
 
@@ -106,7 +112,12 @@ def _segment(
     h, w = m.evidence.shape
     half = max(3, int(math.ceil(c.window * pr.r)))
     cx, cy = int(round(pr.cx)), int(round(pr.cy))
-    x0, y0, x1, y1 = max(0, cx - half), max(0, cy - half), min(w, cx + half + 1), min(h, cy + half + 1)
+    x0, y0, x1, y1 = (
+        max(0, cx - half),
+        max(0, cy - half),
+        min(w, cx + half + 1),
+        min(h, cy + half + 1),
+    )
     field = m.value if pr.source == LIT_SOURCE else m.evidence
     win = field[y0:y1, x0:x1]
     yy, xx = np.ogrid[y0:y1, x0:x1]
@@ -154,69 +165,83 @@ def _shape(filled: NDArray[np.uint8], comp_area: float) -> list[float] | None:
     ]
 
 
-def _zone_stats(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> list[float] | None:
-    """Mean maps per zone: 0 centre, 1 rest of inside, 2 rim, 3.. outer-ring sectors."""
+def _cells(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> NDArray[np.float64] | None:
+    """Sums of (1, redness, chroma, value, evidence, band, redness²) per (ring, sector).
+
+    One matrix product of a one-hot cell matrix with the window's stacked maps; large
+    candidates are sampled on a grid (``samples_per_radius``).
+    """
     h, w = m.evidence.shape
-    half = int(math.ceil(c.ring[1] * r)) + 1
+    half = int(math.ceil(c.radial[-1] * r)) + 1
     x0, y0 = max(0, int(cx) - half), max(0, int(cy) - half)
     x1, y1 = min(w, int(cx) + half + 1), min(h, int(cy) + half + 1)
     step = max(1, int(r / c.samples_per_radius))
     yy, xx = np.mgrid[y0:y1:step, x0:x1:step].astype(np.float32)
-    dx, dy = xx - cx, yy - cy
-    dist = np.hypot(dx, dy) / max(r, 0.5)
+    dx, dy = (xx - cx).ravel(), (yy - cy).ravel()
+    ring = np.searchsorted(np.asarray(c.radial[1:]), np.hypot(dx, dy) / max(r, 0.5), side="right")
     sector = ((np.arctan2(dy, dx) + math.pi) * (c.sectors / (2 * math.pi))).astype(np.int64)
-    zone = np.full(dist.shape, -1, np.int64)
-    zone[dist < c.inner[1]] = 1
-    zone[dist < c.centre] = 0
-    zone[(dist >= c.rim[0]) & (dist < c.rim[1])] = 2
-    ring = (dist >= c.ring[0]) & (dist < c.ring[1])
-    zone[ring] = 3 + np.minimum(sector[ring], c.sectors - 1)
-    keep = zone >= 0
-    idx = zone[keep]
-    n_z = 3 + c.sectors
-    sl = (slice(y0, y1, step), slice(x0, x1, step))
-    count = np.bincount(idx, minlength=n_z).astype(np.float64)
-    if count[0] + count[1] == 0 or count[2] == 0 or count[3:].sum() == 0:
+    n_r = len(c.radial) - 1
+    keep = ring < n_r
+    if not keep.any():
         return None
+    cell = ring[keep] * c.sectors + np.minimum(sector[keep], c.sectors - 1)
+    onehot = np.zeros((cell.size, n_r * c.sectors), np.float32)
+    onehot[np.arange(cell.size), cell] = 1.0
+    stack = m.stack[y0:y1:step, x0:x1:step].reshape(-1, m.stack.shape[2])[keep]
+    return np.asarray(onehot.T @ stack, np.float64).reshape(n_r, c.sectors, -1)
 
-    def sums(a: NDArray[np.float32] | NDArray[np.bool_]) -> NDArray[np.float64]:
-        return np.bincount(idx, weights=a[sl][keep].astype(np.float64), minlength=n_z)
 
-    red, chro, val, ev, band = (sums(a) for a in (m.redness, m.chroma, m.value, m.evidence, m.band))
-    red2 = np.bincount(idx, weights=m.redness[sl][keep].astype(np.float64) ** 2, minlength=n_z)
-    n_in, n_ring = count[0] + count[1], count[3:].sum()
+def _zone_stats(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> list[float] | None:
+    """Colour inside vs rim vs ring, per sector, and the radial profile."""
+    cells = _cells(m, cx, cy, r, c)
+    if cells is None:
+        return None
+    rings = cells.sum(axis=1)  # (ring, channel)
 
-    def inside(s: NDArray[np.float64]) -> float:
-        return float((s[0] + s[1]) / n_in)
+    def zone(*which: int) -> NDArray[np.float64] | None:
+        total = rings[list(which)].sum(axis=0)
+        return total[1:] / total[0] if total[0] > 0 else None
 
-    def outer(s: NDArray[np.float64]) -> float:
-        return float(s[3:].sum() / n_ring)
-
-    rim = count[2]
-    sec = count[3:] > 0
-    per_sector = inside(ev) - ev[3:][sec] / count[3:][sec]
-    v_in = inside(val)
-    v_centre = float(val[0] / count[0]) if count[0] else v_in
-    r_in = inside(red)
+    inner, rim, outer = zone(*c.inside_rings), zone(c.rim_ring), zone(*c.outer_rings)
+    centre = zone(0)
+    if inner is None or rim is None or outer is None:
+        return None
+    red_i, chro_i, val_i, ev_i, band_i, red2_i = inner
+    sec = cells[list(c.outer_rings)].sum(axis=0)  # (sector, channel)
+    seen = sec[:, 0] > 0
+    per_sector = ev_i - sec[seen, 4] / sec[seen, 0]
+    v_centre = centre[2] if centre is not None else val_i
+    n = np.maximum(rings[:, :1], 1.0)
+    profile = rings[:, 1:] / n  # (ring, channel)
+    seen_cells = cells[:, :, 0] > 0
+    sector_ev = np.where(seen_cells, cells[:, :, 4] / np.maximum(cells[:, :, 0], 1.0), 0.0)
+    n_seen = np.maximum(seen_cells.sum(axis=1), 1)
+    mean_ev = sector_ev.sum(axis=1) / n_seen
+    dev = np.where(seen_cells, sector_ev - mean_ev[:, None], 0.0)
+    spread = np.sqrt((dev**2).sum(axis=1) / n_seen).tolist()
     return [
-        r_in,
-        inside(chro),
-        v_in,
-        math.sqrt(max(0.0, inside(red2) - r_in**2)),
-        float(val[2] / rim),
-        float(red[2] / rim),
-        outer(red),
-        outer(val),
-        outer(chro),
-        inside(ev) - outer(ev),
-        v_in - outer(val),
-        r_in - outer(red),
-        inside(chro) - outer(chro),
-        inside(ev) - float(ev[2] / rim),
+        red_i,
+        chro_i,
+        val_i,
+        math.sqrt(max(0.0, red2_i - red_i**2)),
+        rim[2],
+        rim[0],
+        outer[0],
+        outer[2],
+        outer[1],
+        ev_i - outer[3],
+        val_i - outer[2],
+        red_i - outer[0],
+        chro_i - outer[1],
+        ev_i - rim[3],
         float(per_sector.min()),
         float(per_sector.max()),
-        v_centre / max(v_in, 1e-3),
-        inside(band),
+        v_centre / max(val_i, 1e-3),
+        band_i,
+        *profile[:, 0].tolist(),
+        *profile[:, 2].tolist(),
+        *profile[:, 1].tolist(),
+        *spread,
     ]
 
 

@@ -113,6 +113,8 @@ class Maps:
     origin: tuple[int, int]
     scale: float
     work_side: float
+    stack: F32
+    """(h, w, 7): 1, redness, chroma, value, evidence, band, redness² (for zone sums)."""
 
 
 @dataclass(frozen=True)
@@ -149,16 +151,22 @@ def make_maps(
     sigma_px = p.sigma * c.work_side
     if sigma_px >= 0.3:
         work = cv2.GaussianBlur(work, (0, 0), sigma_px)
-    band = band_mask(np.asarray(work, np.uint8), p.reference_rgb, p.c_delta, gain_range=p.gain_range)
+    band = band_mask(
+        np.asarray(work, np.uint8), p.reference_rgb, p.c_delta, gain_range=p.gain_range
+    )
     bgr = np.asarray(work, np.float32)
     b, g, r = bgr[..., 0], bgr[..., 1], bgr[..., 2]
     top = np.maximum(r, np.maximum(g, b))
     redness = np.clip((r - np.maximum(g, b)) / (r + EPS), 0.0, 1.0)
     chroma = r / (r + g + b + 3 * EPS)
     bright = max(c.min_bright, float(np.quantile(top, c.bright_quantile)) / 255.0)
-    value = np.clip(top / (255.0 * bright), 0.0, 1.0)
-    evidence = redness * np.clip(value / c.value_knee, 0.0, 1.0)
-    return Maps(bgr, redness, chroma, value, evidence, band, bright, (x, y), scale, c.work_side)
+    value = np.asarray(np.clip(top / (255.0 * bright), 0.0, 1.0), np.float32)
+    evidence = np.asarray(redness * np.clip(value / c.value_knee, 0.0, 1.0), np.float32)
+    ones = np.ones_like(redness)
+    stack = np.dstack([ones, redness, chroma, value, evidence, band.astype(np.float32), redness**2])
+    return Maps(
+        bgr, redness, chroma, value, evidence, band, bright, (x, y), scale, c.work_side, stack
+    )
 
 
 def _blobs(m: Maps, c: ProposalParams, lit: bool) -> list[Proposal]:
@@ -173,9 +181,7 @@ def _blobs(m: Maps, c: ProposalParams, lit: bool) -> list[Proposal]:
         k_out = max(3, int(round(2 * c.surround_sigma * r)) | 1)
         diff = cv2.blur(field, (k_in, k_in)) - cv2.blur(field, (k_out, k_out))
         size = max(3, 2 * int(r) + 1)
-        peaks = (diff >= cv2.dilate(diff, np.ones((size, size), np.uint8))) & (
-            diff >= floor
-        )
+        peaks = (diff >= cv2.dilate(diff, np.ones((size, size), np.uint8))) & (diff >= floor)
         ys, xs = np.nonzero(peaks)
         if xs.size == 0:
             continue

@@ -38,17 +38,24 @@ class TrainParams:
     real_negatives : also learn from the ``train`` part of the real photos.
     match_margin : growth of the true box (fraction of its size) for a match.
     area_ratio : a matching candidate's box area is within this factor of the truth's.
+    ignore_ratio : a candidate on the disc whose area is off by more than ``area_ratio``
+        but within this factor (a reflector's spot, a region grown into the body) is
+        neither a disc nor a non-disc: it is left out of training.
     """
 
     train_count: int = 200
     validation_count: int = 100
     real_negatives: bool = True
     match_margin: float = 0.25
-    area_ratio: float = 5.0
+    area_ratio: float = 2.5
+    ignore_ratio: float = 6.0
 
 
-def matches(c: Candidate, truth: tuple[int, int, int, int] | None, tp: TrainParams) -> bool:
-    """Whether a candidate is the true disc."""
+def matches(
+    c: Candidate, truth: tuple[int, int, int, int] | None, tp: TrainParams, ratio_max: float = 0.0
+) -> bool:
+    """Whether a candidate is the true disc (box area within ``ratio_max`` or the
+    training parameters' ``area_ratio``)."""
     if truth is None:
         return False
     x, y, w, h = truth
@@ -56,12 +63,14 @@ def matches(c: Candidate, truth: tuple[int, int, int, int] | None, tp: TrainPara
     mx, my = w * tp.match_margin, h * tp.match_margin
     inside = x - mx <= cx <= x + w + mx and y - my <= cy <= y + h + my
     ratio = (c.bbox[2] * c.bbox[3]) / max(1.0, float(w * h))
-    return inside and 1.0 / tp.area_ratio <= ratio <= tp.area_ratio
+    limit = ratio_max or tp.area_ratio
+    return inside and 1.0 / limit <= ratio <= limit
 
 
 @dataclass(frozen=True)
 class Rows:
-    """Feature rows of many scenes: ``x`` (n, k), label ``y`` (n,), scene index (n,)."""
+    """Feature rows of many scenes: ``x`` (n, k), label ``y`` (n,) of 1 disc, 0 not,
+    -1 ambiguous (left out of training), scene index (n,)."""
 
     x: NDArray[np.float64]
     y: NDArray[np.int64]
@@ -82,7 +91,12 @@ def collect(samples: Iterable[Sample], profile: CameraProfile, tp: TrainParams) 
         discs.append(s.disc)
         for c in find_candidates(s.image, profile)[0]:
             x.append(c.features)
-            y.append(int(s.disc and matches(c, s.bbox, tp)))
+            label = 0
+            if s.disc and matches(c, s.bbox, tp):
+                label = 1
+            elif s.disc and matches(c, s.bbox, tp, tp.ignore_ratio):
+                label = -1
+            y.append(label)
             idx.append(i)
     xa = np.stack(x) if x else np.zeros((0, len(FEATURE_NAMES)))
     return Rows(xa, np.asarray(y, np.int64), np.asarray(idx, np.int64), np.asarray(discs))
@@ -107,12 +121,15 @@ def train(
     from . import PIPELINE_PROFILE
 
     t0 = time.perf_counter()
-    parts = [collect(scenes(g, "train", params.train_count), PIPELINE_PROFILE, params) for g in generators]
+    parts = [
+        collect(scenes(g, "train", params.train_count), PIPELINE_PROFILE, params)
+        for g in generators
+    ]
     if params.real_negatives:
         parts.append(collect(real_photos("train"), PIPELINE_PROFILE, params))
     x = np.concatenate([r.x for r in parts])
     y = np.concatenate([r.y for r in parts])
-    model = fit(x, y, seed=seed, params=verifier)
+    model = fit(x[y >= 0], y[y >= 0], seed=seed, params=verifier)
     val = collect(
         (s for g in generators for s in scenes(g, "validation", params.validation_count)),
         PIPELINE_PROFILE,
@@ -125,8 +142,8 @@ def train(
         else "none",
         "seed": seed,
         "train_scenes_per_generator": params.train_count,
-        "train_candidates": int(len(y)),
-        "train_disc_candidates": int(y.sum()),
+        "train_candidates": int((y >= 0).sum()),
+        "train_disc_candidates": int((y == 1).sum()),
         "validation_scenes_per_generator": params.validation_count,
         "train_params": asdict(params),
         "verifier_params": asdict(verifier),

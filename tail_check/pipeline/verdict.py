@@ -20,7 +20,14 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CalibrationParams", "Combine", "VerdictParams", "calibrate", "combine", "learned_verdict"]
+__all__ = [
+    "CalibrationParams",
+    "Combine",
+    "VerdictParams",
+    "calibrate",
+    "combine",
+    "learned_verdict",
+]
 
 Verdict = Literal["present", "absent", "uncertain"]
 Combine = Literal["learned", "guarded", "agree"]
@@ -93,10 +100,11 @@ class VerdictParams:
         Lower edge of the abstention band; None takes the model's.
     combine : {"learned", "guarded", "agree"}
         ``learned``: the verifier alone (the default). ``guarded``: the hand-tuned
-        verdict, which the verifier may only downgrade (``present`` to ``uncertain``
-        when it is not at least ``uncertain`` itself) or raise (``absent`` to
-        ``uncertain``). ``agree``: ``present`` only when both say so, ``absent`` only
-        when both say so, else ``uncertain``.
+        verdict, which the verifier may only question: a hand-tuned ``present`` the
+        verifier calls ``absent`` becomes ``uncertain``, and a learned ``present`` the
+        hand-tuned detector does not share becomes ``uncertain`` (the verifier never
+        makes a ``present`` on its own). ``agree``: a verdict only when both give it,
+        else ``uncertain``.
     """
 
     present_threshold: float | None = None
@@ -113,15 +121,19 @@ def learned_verdict(prob: float, present_at: float, uncertain_at: float) -> Verd
     return "absent"
 
 
-def combine(hand: Verdict, learned: Verdict, prob: float, params: VerdictParams) -> tuple[Verdict, str]:
+def combine(
+    hand: Verdict, learned: Verdict, prob: float, params: VerdictParams
+) -> tuple[Verdict, str]:
     """Final verdict and the reason (``prob``: the best candidate's disc probability)."""
     said = f"verifier disc probability {prob:.2f}"
     if params.combine == "learned" or hand == learned:
         return learned, f"learned verifier: disc probability {prob:.2f}"
     if params.combine == "agree":
         return "uncertain", f"hand-tuned detector says {hand}, {said}; look"
-    if hand == "present" and learned == "absent":
-        return "uncertain", f"disc-shaped, but the verifier doubts it ({said})"
-    if hand == "absent" and learned != "absent":
+    if hand == "present":
+        if learned == "absent":
+            return "uncertain", f"disc-shaped, but the verifier doubts it ({said}); look"
+        return "present", f"disc-shaped red region, the verifier does not object ({said})"
+    if learned == "present":
         return "uncertain", f"the verifier sees a possible disc ({said}); look"
     return hand, said
