@@ -168,8 +168,7 @@ def _shape(filled: NDArray[np.uint8], comp_area: float) -> list[float] | None:
 def _cells(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> NDArray[np.float64] | None:
     """Sums of (1, redness, chroma, value, evidence, band, redness²) per (ring, sector).
 
-    One matrix product of a one-hot cell matrix with the window's stacked maps; large
-    candidates are sampled on a grid (``samples_per_radius``).
+    Large candidates are sampled on a grid (``samples_per_radius``).
     """
     h, w = m.evidence.shape
     half = int(math.ceil(c.radial[-1] * r)) + 1
@@ -185,10 +184,11 @@ def _cells(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> NDArray
     if not keep.any():
         return None
     cell = ring[keep] * c.sectors + np.minimum(sector[keep], c.sectors - 1)
-    onehot = np.zeros((cell.size, n_r * c.sectors), np.float32)
-    onehot[np.arange(cell.size), cell] = 1.0
     stack = m.stack[y0:y1:step, x0:x1:step].reshape(-1, m.stack.shape[2])[keep]
-    return np.asarray(onehot.T @ stack, np.float64).reshape(n_r, c.sectors, -1)
+    n_c = n_r * c.sectors
+    # bincount per channel: no BLAS call (its threads would fight over a loaded core).
+    sums = [np.bincount(cell, weights=stack[:, k], minlength=n_c) for k in range(stack.shape[1])]
+    return np.stack(sums, axis=1).reshape(n_r, c.sectors, -1)
 
 
 def _zone_stats(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> list[float] | None:
