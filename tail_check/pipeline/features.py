@@ -188,7 +188,7 @@ def _cells(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> NDArray
     n_c = n_r * c.sectors
     # bincount per channel: no BLAS call (its threads would fight over a loaded core).
     sums = [np.bincount(cell, weights=stack[:, k], minlength=n_c) for k in range(stack.shape[1])]
-    return np.stack(sums, axis=1).reshape(n_r, c.sectors, -1)
+    return np.asarray(np.stack(sums, axis=1), np.float64).reshape(n_r, c.sectors, -1)
 
 
 def _zone_stats(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> list[float] | None:

@@ -7,12 +7,13 @@ Issue targets, asserted here: >= 97 % correct verdicts, `uncertain` <= 5 %, and 
 
 The set was cut from 500 to COUNT images because rendering dominated the suite's time;
 the images are also cached as PNG under ``var/tail_cache`` (``DEPOT_TAIL_CACHE``), so a
-second run only reads them. Statistical power: measured on the first 200: 99.5 % correct (disc 85/1/0
-present/uncertain/absent, no disc 0/0/114), 0.5 % uncertain, no false `present`; on
-all 500: 97.8 % (disc 220/5/4, no disc 0/2/269), 1.4 % uncertain. The prefix happens to
-be easier than the whole, so the floor of 97 % leaves room for about 5 more wrong
-answers before the test fails (on 500 it left about 4). One wrong answer of 200 bounds
-the error rate below 2.4 % (one-sided 95 %, Clopper-Pearson), 11 of 500 below 3.9 %.
+second run only reads them. Statistical power: measured on the first 200: 99.5 %
+correct (disc 85/1/0 present/uncertain/absent, no disc 0/0/114), 0.5 % uncertain,
+no false `present`; on all 500: 97.8 % (disc 220/5/4, no disc 0/2/269), 1.4 %
+uncertain. The prefix happens to be easier than the whole, so the floor of 97 %
+leaves room for about 5 more wrong answers before the test fails (on 500 it left
+about 4). One wrong answer of 200 bounds the error rate below 2.4 % (one-sided 95 %,
+Clopper-Pearson), 11 of 500 below 3.9 %.
 The test guards against regressions on fixed scenes; the generalisation figures are
 the cross-generator ones (``test_tail_cross_generator.py``, ``bench.tail_accuracy``).
 """
