@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..detect import DetectionResult, check_image, detect
+from ..detect import DetectionResult, Verdict, check_image, detect
 from ..profile import DEFAULT_PROFILE, CameraProfile
 from .candidates import FEATURE_NAMES, Candidate, CandidateParams, find_candidates
 from .verdict import VerdictParams, combine, learned_verdict
@@ -38,6 +38,8 @@ __all__ = [
     "VerdictParams",
     "VerifierParams",
     "best_candidate",
+    "find_candidates",
+    "judge",
     "load_model",
     "run_pipeline",
 ]
@@ -69,6 +71,27 @@ def best_candidate(candidates: list[Candidate], model: TreeModel) -> tuple[Candi
     return candidates[i], float(probs[i])
 
 
+def judge(
+    candidates: list[Candidate],
+    model: TreeModel,
+    params: VerdictParams = VerdictParams(),
+    hand: Verdict | None = None,
+) -> tuple[Verdict, str, Candidate | None, float]:
+    """Verdict, reason, best candidate and its probability for one snapshot's candidates.
+
+    ``hand`` is the hand-tuned detector's verdict (needed unless ``params.combine`` is
+    ``learned``). One set of candidates can be judged by several models.
+    """
+    best, prob = best_candidate(candidates, model)
+    present_at = params.present_threshold or float(model.meta["present_threshold"])
+    uncertain_at = params.uncertain_threshold or float(model.meta["uncertain_threshold"])
+    learned = learned_verdict(prob, present_at, uncertain_at)
+    if params.combine != "learned" and hand is None:
+        raise ValueError(f"combine={params.combine!r} needs the hand-tuned verdict")
+    verdict, reason = combine(hand or learned, learned, prob, params)
+    return verdict, reason, best, prob
+
+
 def run_pipeline(
     image_bgr: NDArray[np.uint8],
     profile: CameraProfile | None = None,
@@ -81,7 +104,8 @@ def run_pipeline(
     Parameters
     ----------
     image_bgr : ndarray, shape (H, W, 3), uint8, BGR
-    profile : camera profile (default :data:`PIPELINE_PROFILE`)
+    profile : camera profile (default: :data:`PIPELINE_PROFILE` for the learned stages,
+        :data:`~tail_check.profile.DEFAULT_PROFILE` for the hand-tuned detector)
     model : verifier (default: the shipped ``AB`` model)
     params : thresholds and whether the hand-tuned detector is consulted
 
@@ -95,13 +119,13 @@ def run_pipeline(
     p = profile if profile is not None else PIPELINE_PROFILE
     m = model if model is not None else load_model()
     cands, maps = find_candidates(image, p)
-    best, prob = best_candidate(cands, m)
-    present_at = params.present_threshold or float(m.meta["present_threshold"])
-    uncertain_at = params.uncertain_threshold or float(m.meta["uncertain_threshold"])
-    learned = learned_verdict(prob, present_at, uncertain_at)
-    hand = detect(image, p) if params.combine != "learned" else None
-    verdict, reason = combine(hand.verdict if hand else learned, learned, prob, params)
+    # The hand-tuned detector keeps its own default (its search region) when no profile
+    # is given: it was tuned with it.
+    hand = detect(image, profile) if params.combine != "learned" else None
+    verdict, reason, best, prob = judge(cands, m, params, hand.verdict if hand else None)
     bbox = best.bbox if best is not None and verdict != "absent" else None
+    if hand is not None and hand.verdict == verdict and hand.bbox is not None:
+        bbox = hand.bbox
     score = 1.0 - prob if verdict == "absent" else prob
     height, width = image.shape[:2]
     return DetectionResult(
