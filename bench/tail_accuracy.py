@@ -16,6 +16,23 @@ question, see :class:`tail_check.pipeline.VerdictParams`).
 The hand-tuned detector has no training, so for it (a) and (b) are the same scenes.
 Rendered scenes are cached under ``var/tail_cache`` (``DEPOT_TAIL_CACHE``).
 
+Measured (150 held-out seeds per generator; real photos 17 report + 18 train; models
+``verifier_{A,B,AB}.json`` from ``depot tail-train --seed 1``), correct / uncertain /
+false present:
+
+=========  ============  ===================  ==================  ======================
+variant    A own         A cross (on B's)     B own               B cross (on A's)
+=========  ============  ===================  ==================  ======================
+baseline   96.7/2.0/1    (no training)        53.3/4.7/0          (no training)
+learned    88.0/11.3/0   69.3/22.7/0          47.3/22.0/0         50.0/23.3/1 (B:300118)
+guarded    96.0/3.3/0    90.0/9.3/0           52.7/5.3/0          52.7/8.7/0
+=========  ============  ===================  ==================  ======================
+
+Real photos: no ``present`` for any variant or model (report part: learned 1/17
+``uncertain`` with model A, guarded 0/17). The targets (>= 95 % cross-generator) are
+not met on generator B: most of B's discs (pinkish paint, turned edge-on, on red
+bodies, small at dusk) are ``absent`` for every variant.
+
 Run: ``.venv/bin/python -m bench.tail_accuracy [--count N] [--variant NAME ...]``
 """
 
