@@ -156,14 +156,27 @@ def real_dir() -> Path:
     return Path(os.environ.get("DEPOT_REAL_DATA_DIR", REAL_DIR_DEFAULT))
 
 
-def real_photos() -> Iterator[Sample]:
-    """Every real photo under :func:`real_dir` (none shows a disc); nothing if absent."""
+RealPart = Literal["all", "train", "report"]
+
+
+def real_photos(part: RealPart = "all") -> Iterator[Sample]:
+    """Real photos under :func:`real_dir` (none shows a disc); nothing if absent.
+
+    ``part`` splits each folder by the position of the file in name order: ``train`` is
+    the 1st, 3rd, 5th ... photo (a verifier may learn from them as negatives), ``report``
+    the 2nd, 4th ... (never trained or tuned on; the benchmark and tests report them).
+    """
+    if part not in ("all", "train", "report"):
+        raise ValueError(f"unknown real-photo part {part!r}; use all, train or report")
     root = real_dir()
     for name in REAL_SETS:
         folder = root / name
         if not folder.is_dir():
             continue
-        for path in sorted(folder.glob("*.jpg")):
+        paths = sorted(folder.glob("*.jpg"))
+        if part != "all":
+            paths = paths[0 if part == "train" else 1 :: 2]
+        for path in paths:
             image = cv2.imread(str(path), cv2.IMREAD_COLOR)
             if image is None:
                 raise ValueError(f"cannot decode real photo {path}")

@@ -57,6 +57,10 @@ class Confusion:
         """Number of ``absent`` answers on scenes with a disc."""
         return self.counts[("present", "absent")]
 
+    def by_verdict(self, verdict: str) -> int:
+        """Number of answers equal to ``verdict``, whatever the truth."""
+        return sum(n for (_, v), n in self.counts.items() if v == verdict)
+
     def row(self, truth: str) -> str:
         """``p/u/a`` counts for one truth."""
         return "/".join(str(self.counts[(truth, v)]) for v in VERDICTS)
@@ -80,6 +84,15 @@ class Tally:
     by_kind: dict[str, Confusion] = field(default_factory=lambda: defaultdict(Confusion))
     false_present_names: list[str] = field(default_factory=list)
 
+    def add(self, sample: Sample, verdict: str) -> None:
+        """Count one sample's answer."""
+        truth = "present" if sample.disc else "absent"
+        self.overall.add(truth, verdict)
+        self.by_condition[sample.condition].add(truth, verdict)
+        self.by_kind[sample.kind].add(truth, verdict)
+        if verdict == "present" and not sample.disc:
+            self.false_present_names.append(f"{sample.source}:{sample.name}")
+
     def lines(self, title: str) -> list[str]:
         """Printable report."""
         out = [f"== {title}", f"  all            {self.overall.summary()}"]
@@ -94,11 +107,5 @@ def tally(samples: Iterable[Sample], verdict_of: Callable[[Sample], str]) -> Tal
     """Run ``verdict_of`` on every sample and count the answers."""
     result = Tally()
     for sample in samples:
-        truth = "present" if sample.disc else "absent"
-        verdict = verdict_of(sample)
-        result.overall.add(truth, verdict)
-        result.by_condition[sample.condition].add(truth, verdict)
-        result.by_kind[sample.kind].add(truth, verdict)
-        if verdict == "present" and not sample.disc:
-            result.false_present_names.append(f"{sample.source}:{sample.name}")
+        result.add(sample, verdict_of(sample))
     return result

@@ -2,14 +2,15 @@
 
 A candidate is a disc (label 1) when its centre lies in the true disc box (grown by
 ``TrainParams.match_margin``) and its box area is within ``TrainParams.area_ratio`` of
-the true box's; every other candidate, on every scene, is a hard negative. The
-thresholds are chosen on the generators' *validation* seeds (never the training
-seeds, never the held-out ones the benchmark reports).
+the true box's (a lit reflector's bright spot is smaller than its disc); every other
+candidate, on every scene, is a hard negative, and so is every candidate on the real
+photos of the ``train`` part (:func:`tail_check.dataset.real_photos`). The thresholds
+are chosen on the generators' *validation* seeds (never the training seeds, never the
+held-out ones the benchmark reports, never a real photo).
 """
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass
@@ -18,14 +19,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..dataset import Generator, Sample, scenes
-from ..detect import detect
-from ..profile import DEFAULT_PROFILE
-from . import best_candidate
+from ..dataset import Generator, Sample, real_photos, scenes
+from ..profile import CameraProfile
 from .candidates import Candidate, find_candidates
+from .verdict import calibrate
 from .verifier import TreeModel, VerifierParams, fit
 
-__all__ = ["TrainParams", "train"]
+__all__ = ["TrainParams", "collect", "train"]
 
 
 @dataclass(frozen=True)
@@ -35,26 +35,27 @@ class TrainParams:
     Attributes
     ----------
     train_count, validation_count : scenes per generator from each split.
+    real_negatives : also learn from the ``train`` part of the real photos.
     match_margin : growth of the true box (fraction of its size) for a match.
     area_ratio : a matching candidate's box area is within this factor of the truth's.
-    present_margin : added to the highest validation no-disc probability.
-    present_floor : the ``present`` threshold is never below this.
-    uncertain_quantile : the abstention band starts at this quantile of the
-        validation no-disc probabilities (so few plain scenes go to a person).
-    uncertain_floor : ... and never below this.
+    ignore_ratio : a candidate on the disc whose area is off by more than ``area_ratio``
+        but within this factor (a reflector's spot, a region grown into the body) is
+        neither a disc nor a non-disc: it is left out of training.
     """
 
     train_count: int = 200
     validation_count: int = 100
+    real_negatives: bool = True
     match_margin: float = 0.25
-    area_ratio: float = 3.0
-    present_margin: float = 0.02
-    present_floor: float = 0.6
-    uncertain_quantile: float = 0.95
-    uncertain_floor: float = 0.2
+    area_ratio: float = 2.5
+    ignore_ratio: float = 6.0
 
 
-def _matches(c: Candidate, truth: tuple[int, int, int, int] | None, tp: TrainParams) -> bool:
+def matches(
+    c: Candidate, truth: tuple[int, int, int, int] | None, tp: TrainParams, ratio_max: float = 0.0
+) -> bool:
+    """Whether a candidate is the true disc (box area within ``ratio_max`` or the
+    training parameters' ``area_ratio``)."""
     if truth is None:
         return False
     x, y, w, h = truth
@@ -62,53 +63,51 @@ def _matches(c: Candidate, truth: tuple[int, int, int, int] | None, tp: TrainPar
     mx, my = w * tp.match_margin, h * tp.match_margin
     inside = x - mx <= cx <= x + w + mx and y - my <= cy <= y + h + my
     ratio = (c.bbox[2] * c.bbox[3]) / max(1.0, float(w * h))
-    return inside and 1.0 / tp.area_ratio <= ratio <= tp.area_ratio
+    limit = ratio_max or tp.area_ratio
+    return inside and 1.0 / limit <= ratio <= limit
 
 
-Rows = tuple[list[NDArray[np.float64]], list[int]]
+@dataclass(frozen=True)
+class Rows:
+    """Feature rows of many scenes: ``x`` (n, k), label ``y`` (n,) of 1 disc, 0 not,
+    -1 ambiguous (left out of training), scene index (n,)."""
+
+    x: NDArray[np.float64]
+    y: NDArray[np.int64]
+    scene: NDArray[np.int64]
+    discs: NDArray[np.bool_]
+    """Per scene: a disc is on it."""
 
 
-def _rows(samples: Iterable[Sample], tp: TrainParams) -> Rows:
+def collect(samples: Iterable[Sample], profile: CameraProfile, tp: TrainParams) -> Rows:
+    """Candidates of every sample, labelled."""
+    from . import FEATURE_NAMES
+
     x: list[NDArray[np.float64]] = []
     y: list[int] = []
-    for s in samples:
-        cands, _ = find_candidates(s.image, DEFAULT_PROFILE, hand=detect(s.image).candidates)
-        for c in cands:
+    idx: list[int] = []
+    discs: list[bool] = []
+    for i, s in enumerate(samples):
+        discs.append(s.disc)
+        for c in find_candidates(s.image, profile)[0]:
             x.append(c.features)
-            y.append(int(s.disc and _matches(c, s.bbox, tp)))
-    return x, y
+            label = 0
+            if s.disc and matches(c, s.bbox, tp):
+                label = 1
+            elif s.disc and matches(c, s.bbox, tp, tp.ignore_ratio):
+                label = -1
+            y.append(label)
+            idx.append(i)
+    xa = np.stack(x) if x else np.zeros((0, len(FEATURE_NAMES)))
+    return Rows(xa, np.asarray(y, np.int64), np.asarray(idx, np.int64), np.asarray(discs))
 
 
-def _image_probs(samples: list[Sample], model: TreeModel) -> NDArray[np.float64]:
-    out = []
-    for s in samples:
-        cands, _ = find_candidates(s.image, DEFAULT_PROFILE, hand=detect(s.image).candidates)
-        out.append(best_candidate(cands, model)[1])
-    return np.asarray(out)
-
-
-def _calibrate(
-    probs: NDArray[np.float64], discs: NDArray[np.bool_], tp: TrainParams
-) -> dict[str, Any]:
-    neg = probs[~discs]
-    top = float(neg.max()) if neg.size else 0.0
-    present = min(0.999, max(tp.present_floor, top + tp.present_margin))
-    q = float(np.quantile(neg, tp.uncertain_quantile)) if neg.size else 0.0
-    uncertain = min(present - 1e-3, max(tp.uncertain_floor, q))
-    pos = probs[discs]
-    return {
-        "present_threshold": round(present, 4),
-        "uncertain_threshold": round(uncertain, 4),
-        "validation_no_disc": int(neg.size),
-        "validation_false_present": int((neg >= present).sum()),
-        # 0 of n observed: the one-sided 95 % upper bound of the rate is about 3 / n.
-        "false_present_rate_upper95": round(3.0 / max(1, neg.size), 4),
-        "validation_disc": int(pos.size),
-        "validation_recall_present": round(float((pos >= present).mean()) if pos.size else 0, 4),
-        "validation_recall_uncertain": round(
-            float((pos >= uncertain).mean()) if pos.size else 0, 4
-        ),
-    }
+def scene_probs(rows: Rows, model: TreeModel) -> NDArray[np.float64]:
+    """Highest candidate probability per scene (0 for a scene without candidates)."""
+    out = np.zeros(len(rows.discs))
+    if len(rows.y):
+        np.maximum.at(out, rows.scene, model.probability(rows.x))
+    return out
 
 
 def train(
@@ -119,28 +118,36 @@ def train(
     verifier: VerifierParams = VerifierParams(),
 ) -> TreeModel:
     """Train and calibrate a verifier on the given generators' training seeds."""
+    from . import PIPELINE_PROFILE
+
     t0 = time.perf_counter()
-    xs: list[NDArray[np.float64]] = []
-    ys: list[int] = []
-    for g in generators:
-        x, y = _rows(scenes(g, "train", params.train_count), params)
-        xs += x
-        ys += y
-    model = fit(np.stack(xs), np.asarray(ys, np.int64), seed=seed, params=verifier)
-    val = [s for g in generators for s in scenes(g, "validation", params.validation_count)]
-    probs = _image_probs(val, model)
+    parts = [
+        collect(scenes(g, "train", params.train_count), PIPELINE_PROFILE, params)
+        for g in generators
+    ]
+    if params.real_negatives:
+        parts.append(collect(real_photos("train"), PIPELINE_PROFILE, params))
+    x = np.concatenate([r.x for r in parts])
+    y = np.concatenate([r.y for r in parts])
+    model = fit(x[y >= 0], y[y >= 0], seed=seed, params=verifier)
+    val = collect(
+        (s for g in generators for s in scenes(g, "validation", params.validation_count)),
+        PIPELINE_PROFILE,
+        params,
+    )
     meta: dict[str, Any] = {
         "trained_on": list(generators),
+        "real_negatives": "train part (1st, 3rd, ... photo of each folder)"
+        if params.real_negatives
+        else "none",
         "seed": seed,
         "train_scenes_per_generator": params.train_count,
-        "train_candidates": len(ys),
-        "train_disc_candidates": int(sum(ys)),
+        "train_candidates": int((y >= 0).sum()),
+        "train_disc_candidates": int((y == 1).sum()),
         "validation_scenes_per_generator": params.validation_count,
         "train_params": asdict(params),
         "verifier_params": asdict(verifier),
         "seconds": round(time.perf_counter() - t0, 1),
-        **_calibrate(probs, np.asarray([s.disc for s in val]), params),
+        **calibrate(scene_probs(val, model), val.discs),
     }
-    if not math.isfinite(meta["present_threshold"]):  # pragma: no cover - guarded above
-        raise RuntimeError("threshold calibration failed")
     return TreeModel(model.features, model.base, model.rate, model.trees, meta)

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .candidates import FEATURE_NAMES
+from .features import FEATURE_NAMES
 
 __all__ = ["TreeModel", "VerifierParams", "fit"]
 
@@ -76,13 +77,45 @@ class TreeModel:
     trees: tuple[_Tree, ...]
     meta: dict[str, Any]
 
+    @cached_property
+    def _packed(self) -> tuple[NDArray[np.int64], ...]:
+        """All trees as (trees, nodes) arrays, padded with leaves, to walk them at once."""
+        size = max((len(t.left) for t in self.trees), default=1)
+        n = len(self.trees)
+        feature = np.zeros((n, size), np.int64)
+        left = np.full((n, size), -1, np.int64)
+        right = np.full((n, size), -1, np.int64)
+        for i, t in enumerate(self.trees):
+            k = len(t.left)
+            feature[i, :k], left[i, :k], right[i, :k] = t.feature, t.left, t.right
+        return feature, left, right
+
+    @cached_property
+    def _values(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        size = max((len(t.left) for t in self.trees), default=1)
+        threshold = np.zeros((len(self.trees), size))
+        value = np.zeros((len(self.trees), size))
+        for i, t in enumerate(self.trees):
+            threshold[i, : len(t.left)], value[i, : len(t.left)] = t.threshold, t.value
+        return threshold, value
+
     def probability(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
         """Disc probability per row of ``x`` (shape (n, len(features)))."""
         # scikit-learn compares float32 features with the thresholds; do the same.
         x = np.atleast_2d(np.asarray(x, np.float32)).astype(np.float64)
-        raw = np.full(x.shape[0], self.base)
-        for tree in self.trees:
-            raw += self.rate * tree.predict(x)
+        feature, left, right = self._packed
+        threshold, value = self._values
+        trees = np.arange(len(self.trees))[None, :]
+        rows = np.arange(x.shape[0])[:, None]
+        node = np.zeros((x.shape[0], len(self.trees)), np.int64)
+        for _ in range(64):  # depth bound; leaves have left == -1
+            nxt = left[trees, node]
+            inner = nxt >= 0
+            if not inner.any():
+                break
+            go_left = x[rows, feature[trees, node]] <= threshold[trees, node]
+            node = np.where(inner, np.where(go_left, nxt, right[trees, node]), node)
+        raw = self.base + self.rate * value[trees, node].sum(axis=1)
         return np.asarray(1.0 / (1.0 + np.exp(-raw)))
 
     def to_json(self) -> str:

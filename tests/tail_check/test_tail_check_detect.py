@@ -2,16 +2,16 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import cv2
 import numpy as np
 import pytest
 
 from tail_check import DEFAULT_PROFILE, decode_snapshot, detect
+from tail_check.dataset import real_dir
 from tail_check.synth import render_snapshot
 
-REAL = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "real" / "red_wagons"
+REAL = real_dir() / "red_wagons"
+"""Found wherever the checkout is (a worktree too): ``DEPOT_REAL_DATA_DIR`` or the default."""
 
 
 def _iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:

@@ -1,20 +1,18 @@
 """Cross-generator accuracy of the tail check and no `present` on real photos (issue 11).
 
-The verifier used on generator A's scenes was trained on generator B only, and the
-other way round, so these figures are on scenes of a kind the model never saw. The
-scenes are the first ``COUNT`` held-out seeds of each generator (the same seeds
-``python -m bench.tail_accuracy`` reports on, with more of them); they are cached as
-PNG under ``var/tail_cache`` because generator B takes about a second per scene.
+The verifier used on generator A's scenes was trained on generator B only (plus the
+``train`` part of the real photos as negatives), and the other way round, so these
+figures are on scenes of a kind the model never saw. The scenes are the first
+``COUNT`` held-out seeds of each generator (the same seeds ``python -m
+bench.tail_accuracy`` reports on, which has all 150); they are cached as PNG under
+``var/tail_cache`` because generator B takes about a second per scene.
 
-Expected on these seeds (measured, guarded pipeline = hand-tuned detector with the
-learned verifier able only to veto a `present` or to raise an `absent` to `uncertain`):
-A (verifier trained on B): 95.8 % correct (disc 9/1/0 present/uncertain/absent, no disc
-0/0/14); B (verifier trained on A): 50.0 % correct (disc 0/3/9, no disc 0/0/12). The
-issue's target (>= 95 % cross-generator) is NOT met on B: most of B's discs give no
-disc-shaped region to the hand-tuned detector. The safety property (no false `present`)
-is asserted exactly; the accuracy floors sit a few points under the measured value. On
-150 held-out seeds one false `present` remains (a hand wheel, A seed 300044): see the
-strict xfail below.
+Two variants: ``learned`` (the staged pipeline alone) and ``guarded`` (the hand-tuned
+verdict, which the verifier may only question). Measured on these seeds: see
+``EXPECTED``; on all 150 held-out seeds per generator see the module docstring of
+:mod:`bench.tail_accuracy` and the issue's closing note. The issue's targets (>= 95 %
+correct cross-generator) are NOT met on generator B; the floors sit a little under
+the measured values. The safety property (no false `present`) is asserted exactly.
 """
 
 from __future__ import annotations
@@ -24,11 +22,19 @@ from pathlib import Path
 
 import pytest
 
+from tail_check import detect
 from tail_check.dataset import Sample, real_dir, real_photos, scenes
-from tail_check.evaluate import Tally, tally
-from tail_check.pipeline import load_model, run_pipeline
+from tail_check.evaluate import Tally
+from tail_check.pipeline import (
+    PIPELINE_PROFILE,
+    VerdictParams,
+    find_candidates,
+    judge,
+    load_model,
+    run_pipeline,
+)
 
-COUNT = 24
+COUNT = 30
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -37,43 +43,75 @@ def _cache() -> None:
     os.environ.setdefault("DEPOT_TAIL_CACHE", str(ROOT / "var" / "tail_cache"))
 
 
-def _cross(generator: str) -> Tally:
-    other = "B" if generator == "A" else "A"
-    model = load_model(other)
-
-    def verdict(s: Sample) -> str:
-        return run_pipeline(s.image, model=model).verdict
-
-    result = tally(scenes(generator, "heldout", COUNT), verdict)  # type: ignore[arg-type]
-    print("\n".join(result.lines(f"generator {generator}, verifier trained on {other}")))
-    return result
+VARIANTS = ("learned", "guarded")
 
 
-EXPECTED = {"A": (0.958, 0.90), "B": (0.50, 0.45)}
-"""(measured share correct, floor asserted) per generator on these seeds."""
+def _judged(samples: list[Sample], models: tuple[str, ...]) -> dict[tuple[str, str], Tally]:
+    """Tallies per (model, variant); candidates and the hand-tuned verdict computed once
+    per sample, then judged by every model (the same code path as ``run_pipeline``)."""
+    out = {(m, v): Tally() for m in models for v in VARIANTS}
+    loaded = {m: load_model(m) for m in models}
+    for s in samples:
+        cands = find_candidates(s.image, PIPELINE_PROFILE)[0]
+        hand = detect(s.image).verdict
+        for (m, v), result in out.items():
+            verdict = judge(cands, loaded[m], VerdictParams(combine=v), hand)[0]  # type: ignore[arg-type]
+            result.add(s, verdict)
+    return out
+
+
+EXPECTED = {
+    ("A", "learned"): (0.70, 0.63),
+    ("B", "learned"): (0.50, 0.43),
+    ("A", "guarded"): (0.90, 0.83),
+    ("B", "guarded"): (0.50, 0.43),
+}
+"""(measured share correct, floor asserted) per generator and variant on these seeds."""
 
 
 @pytest.mark.parametrize("generator", ["A", "B"])
 def test_cross_generator_no_false_present_and_accuracy(generator: str) -> None:
-    result = _cross(generator)
-    assert result.overall.total == COUNT
-    assert result.overall.false_present == 0, result.false_present_names
-    measured, floor = EXPECTED[generator]
-    assert result.overall.correct >= floor, (result.overall.summary(), measured)
+    other = "B" if generator == "A" else "A"
+    samples = list(scenes(generator, "heldout", COUNT))  # type: ignore[arg-type]
+    for (_, variant), result in _judged(samples, (other,)).items():
+        print("\n".join(result.lines(f"{variant}: generator {generator}, trained on {other}")))
+        assert result.overall.total == COUNT
+        assert result.overall.false_present == 0, (variant, result.false_present_names)
+        measured, floor = EXPECTED[(generator, variant)]
+        assert result.overall.correct >= floor, (variant, result.overall.summary(), measured)
 
 
-@pytest.mark.xfail(strict=True, reason="known false present: a hand wheel (A seed 300044)")
-def test_known_false_present_on_a_hand_wheel() -> None:
+@pytest.mark.xfail(strict=True, reason="known false present of the hand-tuned detector")
+def test_hand_tuned_detector_alone_calls_a_hand_wheel_a_disc() -> None:
     sample = next(scenes("A", "heldout", 1, offset=44))
     assert not sample.disc and sample.kind == "hand_wheel"
-    assert run_pipeline(sample.image, model=load_model("B")).verdict != "present"
+    assert detect(sample.image).verdict != "present"
 
 
-@pytest.mark.parametrize("model_name", ["AB", "A", "B"])
-def test_no_present_on_real_photos(model_name: str) -> None:
-    photos = list(real_photos())
+def test_guarded_verifier_questions_that_hand_wheel() -> None:
+    sample = next(scenes("A", "heldout", 1, offset=44))
+    guarded = VerdictParams(combine="guarded")
+    for name in ("B", "AB"):
+        assert run_pipeline(sample.image, model=load_model(name), params=guarded).verdict != (
+            "present"
+        )
+
+
+def test_no_present_on_real_photos() -> None:
+    photos = list(real_photos("report")) + list(real_photos("train"))
     if not photos:
         pytest.skip(f"real photos not found under {real_dir()} (set DEPOT_REAL_DATA_DIR)")
-    model = load_model(model_name)
-    present = [s.name for s in photos if run_pipeline(s.image, model=model).verdict == "present"]
-    assert present == []
+    for (model, variant), result in _judged(photos, ("AB", "A", "B")).items():
+        assert result.overall.by_verdict("present") == 0, (model, variant, result.overall.summary())
+
+
+def test_real_photos_are_split_in_two_disjoint_halves() -> None:
+    report = {s.name for s in real_photos("report")}
+    train = {s.name for s in real_photos("train")}
+    if not report:
+        pytest.skip(f"real photos not found under {real_dir()}")
+    assert report.isdisjoint(train)
+    assert report | train == {s.name for s in real_photos()}
+    assert abs(len(report) - len(train)) <= len(("railsem19_frames", "red_wagons"))
+    with pytest.raises(ValueError, match="part"):
+        next(real_photos("test"))  # type: ignore[arg-type]

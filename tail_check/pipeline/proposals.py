@@ -1,0 +1,214 @@
+"""Stage 1: candidate discs proposed by illumination-robust colour maps, at many scales.
+
+The paper's band ``c_ref ± c_Δ`` is tied to one camera's light; a disc at dusk, in fog,
+under a lit reflector or in another paint leaves it. The maps here depend on colour
+*ratios*, not on brightness:
+
+* ``redness`` — HSV saturation restricted to red hues, ``(R - max(G, B)) / R``;
+* ``chroma`` — the chromaticity ``r = R / (R + G + B)``;
+* ``value`` — ``max(R, G, B)`` divided by the crop's own bright level (auto exposure);
+* ``evidence`` — ``redness`` times a soft ramp of ``value`` (a dark rim is no disc paint).
+
+Two kinds of proposals, both as circles ``(cx, cy, r)`` in working pixels:
+
+1. *blobs*: centre-surround differences of ``evidence`` at a geometric ladder of radii
+   (small and large discs alike, and a disc on a red body by its darker rim);
+2. *regions*: connected components of ``chroma``/``redness`` masks at several strictness
+   levels (a disc is often more saturated than the red-brown body it is mounted on),
+   unioned with the paper's band.
+
+Proposals only propose; the verifier decides.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from ..colour import band_mask
+from ..profile import CameraProfile
+
+__all__ = ["Maps", "Proposal", "ProposalParams", "make_maps", "propose", "region_box"]
+
+F32 = NDArray[np.float32]
+
+
+@dataclass(frozen=True)
+class ProposalParams:
+    """Parameters of the proposal stage (lengths as fractions of the working side).
+
+    Attributes
+    ----------
+    work_side : float
+        Geometric-mean side ``sqrt(w*h)`` of the working crop, pixels.
+    bright_quantile : float
+        Quantile of ``max(R,G,B)`` taken as the crop's bright level (auto exposure).
+    min_bright : float
+        Floor of that bright level, 0..1 (a black frame is not stretched into noise).
+    value_knee : float
+        Normalised value at which ``evidence`` reaches full weight.
+    blob_radii : tuple of float
+        Radii of the centre-surround ladder.
+    centre_sigma, surround_sigma : float
+        Half-sides of the centre and surround box means, in radii.
+    min_response : float
+        Minimum centre-surround difference of ``evidence`` for a blob.
+    lit_radii, min_lit_response : the same for bright spots of ``value`` (a lit
+        reflector at night, a reflector brighter than its disc at dusk).
+    levels : tuple of (float, float)
+        ``(chromaticity r, redness)`` minima of the region masks, loose to strict.
+    radius_range : (float, float)
+        Radii kept.
+    max_blobs, max_regions : int
+        Strongest blobs / largest regions kept per scale or level.
+    """
+
+    work_side: float = 320.0
+    bright_quantile: float = 0.99
+    min_bright: float = 0.12
+    value_knee: float = 0.35
+    blob_radii: tuple[float, ...] = (0.008, 0.012, 0.018, 0.027, 0.04, 0.06, 0.09)
+    centre_sigma: float = 0.7
+    surround_sigma: float = 1.8
+    min_response: float = 0.06
+    lit_radii: tuple[float, ...] = (0.006, 0.010, 0.016, 0.025)
+    min_lit_response: float = 0.2
+    levels: tuple[tuple[float, float], ...] = ((0.40, 0.30), (0.50, 0.55), (0.62, 0.75))
+    radius_range: tuple[float, float] = (0.006, 0.14)
+    max_blobs: int = 8
+    max_regions: int = 4
+
+
+PROPOSAL_PARAMS = ProposalParams()
+LIT_SOURCE = 9
+"""Source number of bright-spot proposals."""
+EPS = 1.0
+"""Added to colour sums (0..255 scale) so black pixels do not divide by zero."""
+
+
+@dataclass(frozen=True)
+class Maps:
+    """Working-scale maps of one crop (float32, 0..1 unless stated).
+
+    Attributes
+    ----------
+    bgr : low-passed colour, 0..255.
+    redness, chroma, value, evidence : see the module docstring.
+    band : the paper's band mask.
+    bright : the crop's bright level before normalisation, 0..1 (night is low).
+    origin, scale : crop origin in image pixels and image-to-working scale.
+    """
+
+    bgr: F32
+    redness: F32
+    chroma: F32
+    value: F32
+    evidence: F32
+    band: NDArray[np.bool_]
+    bright: float
+    origin: tuple[int, int]
+    scale: float
+    work_side: float
+    stack: F32
+    """(h, w, 7): 1, redness, chroma, value, evidence, band, redness² (for zone sums)."""
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """A proposed disc: centre and radius in working pixels, its source and strength."""
+
+    cx: float
+    cy: float
+    r: float
+    source: int
+    """0 evidence blob, 1.. region mask level (1-based), ``len(levels) + 1`` the paper's
+    band, :data:`LIT_SOURCE` a bright spot (a lit reflector, segmented on ``value``)."""
+    response: float
+
+
+def region_box(p: CameraProfile, width: int, height: int) -> tuple[int, int, int, int]:
+    x0, y0, x1, y1 = p.search_region
+    x, y = int(round(x0 * width)), int(round(y0 * height))
+    w = max(1, int(round(x1 * width)) - x)
+    h = max(1, int(round(y1 * height)) - y)
+    return x, y, min(w, width - x), min(h, height - y)
+
+
+def make_maps(
+    image: NDArray[np.uint8], p: CameraProfile, c: ProposalParams = PROPOSAL_PARAMS
+) -> Maps:
+    """Crop the search region, resample to the working scale, low-pass and build the maps."""
+    height, width = image.shape[:2]
+    x, y, w, h = region_box(p, width, height)
+    scale = c.work_side / math.sqrt(width * height)
+    size = (max(8, round(w * scale)), max(8, round(h * scale)))
+    interp = cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR
+    work = cv2.resize(image[y : y + h, x : x + w], size, interpolation=interp)
+    sigma_px = p.sigma * c.work_side
+    if sigma_px >= 0.3:
+        work = cv2.GaussianBlur(work, (0, 0), sigma_px)
+    band = band_mask(
+        np.asarray(work, np.uint8), p.reference_rgb, p.c_delta, gain_range=p.gain_range
+    )
+    bgr = np.asarray(work, np.float32)
+    b, g, r = bgr[..., 0], bgr[..., 1], bgr[..., 2]
+    top = np.maximum(r, np.maximum(g, b))
+    redness = np.clip((r - np.maximum(g, b)) / (r + EPS), 0.0, 1.0)
+    chroma = r / (r + g + b + 3 * EPS)
+    bright = max(c.min_bright, float(np.quantile(top, c.bright_quantile)) / 255.0)
+    value = np.asarray(np.clip(top / (255.0 * bright), 0.0, 1.0), np.float32)
+    evidence = np.asarray(redness * np.clip(value / c.value_knee, 0.0, 1.0), np.float32)
+    ones = np.ones_like(redness)
+    stack = np.dstack([ones, redness, chroma, value, evidence, band.astype(np.float32), redness**2])
+    return Maps(
+        bgr, redness, chroma, value, evidence, band, bright, (x, y), scale, c.work_side, stack
+    )
+
+
+def _blobs(m: Maps, c: ProposalParams, lit: bool) -> list[Proposal]:
+    """Centre-surround peaks of ``evidence`` (or of ``value`` for lit reflectors)."""
+    out: list[Proposal] = []
+    source, field = (LIT_SOURCE, m.value) if lit else (0, m.evidence)
+    floor = c.min_lit_response if lit else c.min_response
+    for frac in c.lit_radii if lit else c.blob_radii:
+        r = frac * c.work_side
+        # Box means (constant time per pixel at any radius) approximate the Gaussians.
+        k_in = max(1, int(round(2 * c.centre_sigma * r)) | 1)
+        k_out = max(3, int(round(2 * c.surround_sigma * r)) | 1)
+        diff = cv2.blur(field, (k_in, k_in)) - cv2.blur(field, (k_out, k_out))
+        size = max(3, 2 * int(r) + 1)
+        peaks = (diff >= cv2.dilate(diff, np.ones((size, size), np.uint8))) & (diff >= floor)
+        ys, xs = np.nonzero(peaks)
+        if xs.size == 0:
+            continue
+        strength = diff[ys, xs]
+        for i in np.argsort(-strength)[: c.max_blobs]:
+            out.append(Proposal(float(xs[i]), float(ys[i]), r, source, float(strength[i])))
+    return out
+
+
+def _regions(m: Maps, c: ProposalParams) -> list[Proposal]:
+    rmin, rmax = (f * c.work_side for f in c.radius_range)
+    amin, amax = math.pi * rmin**2, math.pi * (2 * rmax) ** 2
+    masks = [(m.chroma >= cr) & (m.redness >= rd) for cr, rd in c.levels] + [m.band]
+    out: list[Proposal] = []
+    for level, mask in enumerate(masks, start=1):
+        n, _, stats, cents = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
+        areas = stats[1:n, cv2.CC_STAT_AREA]
+        order = [int(i) + 1 for i in np.argsort(-areas) if amin <= areas[i] <= amax]
+        for k in order[: c.max_regions]:
+            bw, bh = float(stats[k, cv2.CC_STAT_WIDTH]), float(stats[k, cv2.CC_STAT_HEIGHT])
+            r = 0.25 * (bw + bh)
+            if rmin <= r <= rmax:
+                cx, cy = float(cents[k][0]), float(cents[k][1])
+                out.append(Proposal(cx, cy, r, level, float(areas[k - 1]) / (bw * bh)))
+    return out
+
+
+def propose(m: Maps, c: ProposalParams = PROPOSAL_PARAMS) -> list[Proposal]:
+    """Blob and region proposals of one crop (duplicates are merged later, by shape)."""
+    return _blobs(m, c, False) + _blobs(m, c, True) + _regions(m, c)
