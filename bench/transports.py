@@ -229,7 +229,10 @@ def main() -> None:
     os.environ.setdefault(
         "DEPOT_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/postgres"
     )
-    database = bench_database("depot_bench_transports")
+    # Named after the database the tests point at, so that two runs side by side (two
+    # worktrees, each with its own DEPOT_TEST_POSTGRES_URL) never drop each other's.
+    base = os.environ["DEPOT_TEST_POSTGRES_URL"].rsplit("/", 1)[-1]
+    database = bench_database(f"{base}_bench_transports")
     tag = uuid.uuid4().hex[:8]
     env = {
         **os.environ,
