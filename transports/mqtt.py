@@ -5,6 +5,12 @@ property ``device-key``. The bridge holds a shared subscription (several bridges
 load) in a persistent session under a stable client id, and acknowledges a message (PUBACK,
 sent by hand) only after the transaction that stored it has committed: a bridge that dies
 before that gets the message again when it comes back, and idempotency drops the repeat.
+
+Three threads: paho's network thread queues what arrives; the main thread stores a batch
+(one transaction for all its devices) and hands the committed batch to the answer thread,
+which publishes each answer and then acknowledges its message while the next batch is stored.
+The events' receive time is when the network thread read them (MQTT tells nothing of when the
+broker got a message).
 """
 
 from __future__ import annotations
