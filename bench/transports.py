@@ -6,7 +6,10 @@ devices) and is timed from the first send to the last answer: over HTTP the 201 
 POST, over the brokers the last answer on the results topic, which the service publishes only
 after the commit that stored the event (the broker is acknowledged after that commit too).
 
-    .venv/bin/python -m bench.transports [--events 4000]
+    .venv/bin/python -m bench.transports [--events 4000] [--mqtt-workers 2]
+
+The bench database is named after the one ``DEPOT_TEST_POSTGRES_URL`` names (``X`` →
+``X_bench_transports``), so benches of two worktrees on one server never drop each other's.
 """
 
 from __future__ import annotations
