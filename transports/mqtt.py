@@ -96,6 +96,7 @@ class Bridge:
             maxsize=2
         )
         self.stopping = threading.Event()
+        self.signalled = False
         self.connection = 0
         self.stats = BatchStats(log)
         self.client = mqtt.Client(
@@ -205,6 +206,14 @@ class Bridge:
                 failed = True
                 self.stopping.set()
 
+    def _on_signal(self, *_: Any) -> None:
+        """Stop once. A second signal can land while the first handler is inside
+        ``Event.set`` (its lock is not reentrant): it must not call it again, or the bridge
+        hangs (seen: the group's SIGTERM and the ``--workers`` parent's one back to back)."""
+        if not self.signalled:
+            self.signalled = True
+            self.stopping.set()
+
     def serve(self) -> None:
         """Run until SIGTERM or SIGINT; the batch in hand is finished first."""
         host, port = broker_address(self.config.broker_url)
@@ -214,7 +223,7 @@ class Bridge:
         self.client.connect_async(host, port, clean_start=False, properties=connect)
         self.client.loop_start()
         for sig in (signal.SIGTERM, signal.SIGINT):
-            signal.signal(sig, lambda *_: self.stopping.set())
+            signal.signal(sig, self._on_signal)
         answering = threading.Thread(target=self._answering, name="answers", daemon=True)
         answering.start()
         try:

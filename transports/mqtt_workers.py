@@ -14,7 +14,7 @@ from __future__ import annotations
 import logging
 import multiprocessing
 import signal
-import threading
+import time
 from collections.abc import Callable
 from dataclasses import replace
 from multiprocessing.process import BaseProcess
@@ -40,7 +40,9 @@ def serve_workers(run: Callable[[MqttConfig], None], config: MqttConfig, workers
     started again."""
     context = multiprocessing.get_context("fork")  # the handler table installed is inherited
     configs = worker_configs(config, workers)
-    stopping = threading.Event()
+    # A plain flag, not an Event: a signal handler must take no lock the main thread may hold
+    # (Event.wait holds its condition's lock while it wakes up).
+    stopping: list[bool] = []
 
     def start(one: MqttConfig) -> BaseProcess:
         process = context.Process(target=run, args=(one,), name=one.client_id)
@@ -49,10 +51,11 @@ def serve_workers(run: Callable[[MqttConfig], None], config: MqttConfig, workers
 
     processes = [start(one) for one in configs]
     for sig in (signal.SIGTERM, signal.SIGINT):
-        signal.signal(sig, lambda *_: stopping.set())
-    while not stopping.wait(RESTART_AFTER_S):
+        signal.signal(sig, lambda *_: stopping.append(True))
+    while not stopping:
+        time.sleep(RESTART_AFTER_S)
         for k, process in enumerate(processes):
-            if not process.is_alive():
+            if not stopping and not process.is_alive():
                 log.error(
                     "worker %s exited (%s); starting it again", process.name, process.exitcode
                 )
