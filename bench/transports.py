@@ -6,7 +6,10 @@ devices) and is timed from the first send to the last answer: over HTTP the 201 
 POST, over the brokers the last answer on the results topic, which the service publishes only
 after the commit that stored the event (the broker is acknowledged after that commit too).
 
-    .venv/bin/python -m bench.transports [--events 4000]
+    .venv/bin/python -m bench.transports [--events 4000] [--mqtt-workers 2]
+
+The bench database is named after the one ``DEPOT_TEST_POSTGRES_URL`` names (``X`` →
+``X_bench_transports``), so benches of two worktrees on one server never drop each other's.
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ from typing import Any
 import httpx
 
 from bench._server import ADMIN_TOKEN, admin, bench_database, serve
+from transports.mqtt import MqttConfig
+from transports.mqtt_workers import worker_configs
 
 DEPOT = str(Path(sys.executable).parent / "depot")
 DEVICES = 40
@@ -40,6 +45,8 @@ BATCH, INFLIGHT = 500, 1000
 # (default 1000) for a subscriber beyond its in-flight window and drops the rest, although the
 # devices already got their PUBACK; deploy/mosquitto.conf raises the limit, this broker is stock.
 MQTT_WINDOW = INFLIGHT + 500
+# depot mqtt --workers: bridge processes on the shared subscription (one interpreter bounds one).
+MQTT_WORKERS = 2
 
 
 def _devices(url: str) -> list[tuple[str, str]]:
@@ -202,23 +209,41 @@ def _forget_session(client_id: str) -> None:
     client.loop_stop()
 
 
-def _start(env: dict[str, str], command: str, ready: str, log: Path) -> subprocess.Popen[bytes]:
+def _start(
+    env: dict[str, str], command: list[str], ready: str, log: Path, *, times: int = 1
+) -> subprocess.Popen[bytes]:
+    """Start ``depot COMMAND``; ready when its log says ``ready`` ``times`` times."""
     with open(log, "wb") as out:
         process = subprocess.Popen(
-            [DEPOT, command], env=env, stdout=out, stderr=out, start_new_session=True
+            [DEPOT, *command], env=env, stdout=out, stderr=out, start_new_session=True
         )
     deadline = time.monotonic() + 120
-    while ready not in log.read_text(errors="replace"):
+    while log.read_text(errors="replace").count(ready) < times:
         if process.poll() is not None or time.monotonic() > deadline:
             raise RuntimeError(f"depot {command} did not start: {log.read_text()[-2000:]}")
         time.sleep(0.1)
     return process
 
 
+def _config(env: dict[str, str]) -> MqttConfig:
+    """The bench bridge's configuration as ``depot mqtt`` reads it (for its client ids)."""
+    return MqttConfig(
+        broker_url="mqtt://127.0.0.1:1883",
+        client_id=env["DEPOT_MQTT_CLIENT_ID"],
+        prefix=env["DEPOT_MQTT_PREFIX"],
+        inflight=INFLIGHT,
+        batch=BATCH,
+        max_bytes=0,
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--events", type=int, default=4000, help="messages per transport")
     parser.add_argument("--consumers", type=int, default=2, help="depot consume processes")
+    parser.add_argument(
+        "--mqtt-workers", type=int, default=MQTT_WORKERS, help="depot mqtt --workers N"
+    )
     parser.add_argument(
         "--mix",
         choices=("heartbeat", "mixed"),
@@ -229,7 +254,10 @@ def main() -> None:
     os.environ.setdefault(
         "DEPOT_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/postgres"
     )
-    database = bench_database("depot_bench_transports")
+    # Named after the database the tests point at, so that two runs side by side (two
+    # worktrees, each with its own DEPOT_TEST_POSTGRES_URL) never drop each other's.
+    base = os.environ["DEPOT_TEST_POSTGRES_URL"].rsplit("/", 1)[-1]
+    database = bench_database(f"{base}_bench_transports")
     tag = uuid.uuid4().hex[:8]
     env = {
         **os.environ,
@@ -246,9 +274,11 @@ def main() -> None:
     logs = Path(env["DEPOT_DATA_DIR"])
     with serve(database) as url:
         devices = _devices(url)
-        workers = [_start(env, "mqtt", "subscribed to", logs / "mqtt.log")]
+        mqtt_command = ["mqtt", "--workers", str(args.mqtt_workers)]
+        ready = {"times": args.mqtt_workers}
+        workers = [_start(env, mqtt_command, "subscribed to", logs / "mqtt.log", **ready)]
         workers += [
-            _start(env, "consume", "consuming", logs / f"consume-{n}.log")
+            _start(env, ["consume"], "consuming", logs / f"consume-{n}.log")
             for n in range(args.consumers)
         ]
         try:
@@ -261,11 +291,13 @@ def main() -> None:
             for process in workers:
                 os.killpg(process.pid, signal.SIGTERM)
                 process.wait(timeout=30)
-            _forget_session(env["DEPOT_MQTT_CLIENT_ID"])
+            for one in worker_configs(_config(env), args.mqtt_workers):
+                _forget_session(one.client_id)
     where = database.split("@")[-1]
     print(f"{args.events} single-event messages ({args.mix}) per transport into {where}")
     print(f"  HTTP  POST /events ({HTTP_CLIENTS} clients, 2 workers): {http:8.0f} events/s")
-    print(f"  MQTT  depot mqtt (1 bridge, receive max {INFLIGHT}):   {mqtt_rate:8.0f} events/s")
+    bridges = f"{args.mqtt_workers} bridge workers, receive max {INFLIGHT} each"
+    print(f"  MQTT  depot mqtt ({bridges}): {mqtt_rate:8.0f} events/s")
     print(f"  NATS  depot consume ({args.consumers} consumers):       {nats_rate:8.0f} events/s")
     print(f"  (broker transports: at most {BATCH} messages per commit)")
     print(f"  ratios to HTTP: MQTT {mqtt_rate / http:.2f}, JetStream {nats_rate / http:.2f}")

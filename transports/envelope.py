@@ -12,14 +12,16 @@ from __future__ import annotations
 
 import json
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from datetime import datetime
 from typing import Any
 
+from sqlalchemy import select
 from sqlalchemy.exc import DataError, InterfaceError, OperationalError, PendingRollbackError
 from sqlalchemy.orm import Session, sessionmaker
 
-from core.auth import device_for_key
+from core.auth import device_cache, device_for_key, hash_secret
 from core.errors import (
     DepotError,
     PayloadTooLarge,
@@ -27,8 +29,8 @@ from core.errors import (
     Unprocessable,
 )
 from core.models import Device
-from ingest import service
 from ingest.batches import batch_events
+from ingest.multi_store import DeviceBatch, accept_batches
 from ingest.payload import read_json
 
 log = logging.getLogger("depot.transports")
@@ -45,11 +47,16 @@ class InternalError(DepotError):
 
 @dataclass(frozen=True)
 class Message:
-    """One message from a broker, before anything is known to be right about it."""
+    """One message from a broker, before anything is known to be right about it.
+
+    ``received_at``: when the transport received it (JetStream: when the stream stored it;
+    MQTT: when the bridge read it), the events' receive time for liveness; None: when stored.
+    """
 
     device_id: str
     key: str | None
     payload: bytes
+    received_at: datetime | None = None
 
 
 @dataclass(frozen=True)
@@ -85,15 +92,30 @@ def decode(data: bytes, max_bytes: int) -> Any:
     return read_json(data, what="payload")
 
 
-def authenticate(session: Session, message: Message) -> Device:
+def devices_for_keys(session: Session, keys: set[str]) -> dict[str, Device]:
+    """The registered devices of ``keys`` by key: fresh entries of the key cache shared with
+    HTTP (``DEPOT_DEVICE_KEY_TTL_S``), the others with one query for the whole batch."""
+    cache = device_cache()
+    found = {key: device for key in keys if (device := cache.peek(key)) is not None}
+    digests = {hash_secret(key): key for key in keys - found.keys()}
+    if digests:
+        for device in session.scalars(select(Device).where(Device.key_hash.in_(digests))):
+            found[digests[device.key_hash or ""]] = device
+    return found
+
+
+def authenticate(
+    session: Session, message: Message, known: Mapping[str, Device] | None = None
+) -> Device:
     """The registered device whose key came with the message and whose id names the topic.
 
-    Looked up through the same key cache as ``X-Device-Key`` on HTTP (a detached copy, bounded
-    staleness ``DEPOT_DEVICE_KEY_TTL_S``), so a batch costs no look-up per message.
+    ``known``: the batch's devices by key (:func:`devices_for_keys`); else looked up through
+    the same key cache as ``X-Device-Key`` on HTTP (bounded staleness).
     """
     if not message.key:
         raise Unauthorized("the device key is missing; send it as 'device-key' / Depot-Device-Key")
-    device = device_for_key(session, message.key)
+    key = message.key
+    device = device_for_key(session, key) if known is None else known.get(key)
     if device is None or device.id != message.device_id:
         raise Unauthorized(
             f"the key is not that of a registered device {message.device_id!r}; "
@@ -105,14 +127,14 @@ def authenticate(session: Session, message: Message) -> Device:
 
 
 def accept(
-    session: Session, device: Device, payload: Any, transport: str
-) -> tuple[int, dict[str, Any]]:
-    """One payload, single event or batch, through the ingest service as ``POST /events``."""
+    session: Session, device: Device, payload: Any, transport: str, received: datetime | None
+) -> Answer:
+    """One payload, single event or batch, answered as ``POST /events`` answers it."""
     events = batch_events(payload)
-    if events is not None:
-        results = service.accept_batch(session, device, events, transport=transport)
-        return 200, {"results": results}
-    return service.accept_event(session, device, payload, transport=transport)
+    items = [payload] if events is None else events
+    batch = DeviceBatch(device, items, [received] * len(items))
+    (results,) = accept_batches(session, [batch], transport=transport)
+    return _item_answer(results[0]) if events is None else Answer(200, {"results": results})
 
 
 def _event_id(payload: Any) -> Any:
@@ -126,8 +148,8 @@ def _handle(session: Session, message: Message, transport: str, max_bytes: int) 
         with session.begin_nested():
             device = authenticate(session, message)
             payload = decode(message.payload, max_bytes)
-            status, body = accept(session, device, payload, transport)
-        return Answer(status, body)
+            answer = accept(session, device, payload, transport, message.received_at)
+        return answer
     except DepotError as exc:
         return Answer(exc.status, _problem(exc, _event_id(payload)))
     except DataError:  # a NUL character or an out-of-range number, as in the HTTP app
@@ -147,6 +169,7 @@ class _Part:
     index: int
     events: list[Any]
     batch: bool  # sent as {"events": [...]}: answered with "results", as POST /events
+    received_at: datetime | None
 
 
 def _item_answer(item: dict[str, Any]) -> Answer:
@@ -171,16 +194,19 @@ def _sorted_parts(
     locks as the group commit does (two consumers' batches lock in the same order).
     """
     parts: dict[str, tuple[Device, list[_Part]]] = {}
+    known = devices_for_keys(session, {m.key for m in messages if m.key})
     for index, message in enumerate(messages):
         payload: Any = None
         try:
-            device = authenticate(session, message)
+            device = authenticate(session, message, known)
             payload = decode(message.payload, max_bytes)
             events = batch_events(payload)
         except DepotError as exc:
             answers[index] = Answer(exc.status, _problem(exc, _event_id(payload)))
             continue
-        part = _Part(index, [payload] if events is None else events, events is not None)
+        part = _Part(
+            index, [payload] if events is None else events, events is not None, message.received_at
+        )
         parts.setdefault(device.id, (device, []))[1].append(part)
     order = sorted(parts, key=lambda d: (parts[d][0].section or "", d))
     return {d: parts[d] for d in order}
@@ -189,12 +215,21 @@ def _sorted_parts(
 def _grouped(
     session: Session, messages: Sequence[Message], transport: str, max_bytes: int
 ) -> list[Answer]:
-    """The batch as one ``accept_batch`` per device: a few statements per device, not per
-    message. Each event is validated and answered by itself, as in a batch over HTTP."""
+    """The batch's events, every device's, stored with a few statements in all (one raw
+    insert), not a few per device or per message. Each event is validated and answered by
+    itself, as in a batch over HTTP."""
     answers: list[Answer | None] = [None] * len(messages)
-    for device, parts in _sorted_parts(session, messages, max_bytes, answers).values():
-        items = [event for part in parts for event in part.events]
-        results = service.accept_batch(session, device, items, transport=transport)
+    by_device = list(_sorted_parts(session, messages, max_bytes, answers).values())
+    batches = [
+        DeviceBatch(
+            device,
+            [event for part in parts for event in part.events],
+            [part.received_at for part in parts for _ in part.events],
+        )
+        for device, parts in by_device
+    ]
+    stored = accept_batches(session, batches, transport=transport)
+    for (_, parts), results in zip(by_device, stored, strict=True):
         at = 0
         for part in parts:
             mine, at = results[at : at + len(part.events)], at + len(part.events)
@@ -213,7 +248,7 @@ def handle_batch(
 ) -> list[Answer]:
     """Handle the messages in one transaction; returns the answers, in order, after the commit.
 
-    First all together (one ``accept_batch`` per device). Should anything but a refusal go
+    First all together (one raw insert for every device's events). Should anything but a refusal go
     wrong there (a value the database cannot store, a bug), that transaction is rolled back
     whole and the messages are handled again one by one, each in its own savepoint, so one
     bad message never costs the others their answer. Raises the database's error (nothing

@@ -105,8 +105,12 @@ async def ensure_consumer(js: JetStreamContext, config: ConsumeConfig) -> None:
 
 
 def _message(msg: Msg) -> Message:
+    """The message as the envelope takes it; received when the stream stored it (its metadata
+    timestamp, the same on every redelivery), so a backlog does not make a silent device look
+    alive: liveness counts from when the device spoke to the stream, not when we read it."""
     device_id = msg.subject.rsplit(".", 1)[-1]
-    return Message(device_id, (msg.headers or {}).get(KEY_HEADER), msg.data)
+    key = (msg.headers or {}).get(KEY_HEADER)
+    return Message(device_id, key, msg.data, received_at=msg.metadata.timestamp)
 
 
 class Consumer:

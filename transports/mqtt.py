@@ -5,6 +5,12 @@ property ``device-key``. The bridge holds a shared subscription (several bridges
 load) in a persistent session under a stable client id, and acknowledges a message (PUBACK,
 sent by hand) only after the transaction that stored it has committed: a bridge that dies
 before that gets the message again when it comes back, and idempotency drops the repeat.
+
+Three threads: paho's network thread queues what arrives; the main thread stores a batch
+(one transaction for all its devices) and hands the committed batch to the answer thread,
+which publishes each answer and then acknowledges its message while the next batch is stored.
+The events' receive time is when the network thread read them (MQTT tells nothing of when the
+broker got a message).
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 from sqlalchemy.orm import Session, sessionmaker
 
+from core.database import utcnow
 from transports.envelope import DATABASE_DOWN, Answer, Message, handle_batch
 from transports.stats import BatchStats
 
@@ -84,7 +91,12 @@ class Bridge:
     def __init__(self, sessions: sessionmaker[Session], config: MqttConfig) -> None:
         self.sessions, self.config = sessions, config
         self.incoming: queue.Queue[_Incoming] = queue.Queue()
+        # Committed batches, to be answered; bounded so that answering keeps up with storing.
+        self.committed: queue.Queue[tuple[list[_Incoming], list[Answer]] | None] = queue.Queue(
+            maxsize=2
+        )
         self.stopping = threading.Event()
+        self.signalled = False
         self.connection = 0
         self.stats = BatchStats(log)
         self.client = mqtt.Client(
@@ -124,7 +136,8 @@ class Bridge:
                 mid=msg.mid,
                 qos=msg.qos,
                 connection=self.connection,
-                message=Message(device_id, key, bytes(msg.payload)),
+                # MQTT says nothing of when the broker got it: the read is the receive time
+                message=Message(device_id, key, bytes(msg.payload), received_at=utcnow()),
                 correlation=getattr(properties, "CorrelationData", None),
             )
         )
@@ -169,13 +182,37 @@ class Bridge:
         return None  # stopping: unacknowledged, the broker gives them to us again
 
     def _answer(self, item: _Incoming, answer: Answer) -> None:
-        properties = _properties(PacketTypes.PUBLISH)
+        properties = None
         if item.correlation is not None:
+            properties = _properties(PacketTypes.PUBLISH)
             properties.CorrelationData = item.correlation
         topic = f"{self.config.prefix}/results/{item.message.device_id}"
         self.client.publish(topic, answer.to_json(), qos=1, properties=properties)
         if item.connection == self.connection:
             self.client.ack(item.mid, item.qos)
+
+    def _answering(self) -> None:
+        """The answer thread: answers and acknowledges committed batches, in commit order,
+        while the main thread stores the next batch. ``None`` ends it."""
+        failed = False
+        while (done := self.committed.get()) is not None:
+            if failed:
+                continue  # unacknowledged: the broker sends them again to the next bridge
+            try:
+                for item, answer in zip(*done, strict=True):
+                    self._answer(item, answer)
+            except Exception:  # a bug: stop rather than hold messages unacknowledged forever
+                log.exception("answering failed; the bridge stops")
+                failed = True
+                self.stopping.set()
+
+    def _on_signal(self, *_: Any) -> None:
+        """Stop once. A second signal can land while the first handler is inside
+        ``Event.set`` (its lock is not reentrant): it must not call it again, or the bridge
+        hangs (seen: the group's SIGTERM and the ``--workers`` parent's one back to back)."""
+        if not self.signalled:
+            self.signalled = True
+            self.stopping.set()
 
     def serve(self) -> None:
         """Run until SIGTERM or SIGINT; the batch in hand is finished first."""
@@ -186,13 +223,17 @@ class Bridge:
         self.client.connect_async(host, port, clean_start=False, properties=connect)
         self.client.loop_start()
         for sig in (signal.SIGTERM, signal.SIGINT):
-            signal.signal(sig, lambda *_: self.stopping.set())
+            signal.signal(sig, self._on_signal)
+        answering = threading.Thread(target=self._answering, name="answers", daemon=True)
+        answering.start()
         try:
             while not self.stopping.is_set():
                 items = self._take()
-                answers = self._commit(items) if items else []
-                for item, answer in zip(items, answers or (), strict=False):
-                    self._answer(item, answer)
+                answers = self._commit(items) if items else None
+                if answers is not None:
+                    self.committed.put((items, answers))
         finally:
+            self.committed.put(None)  # what is committed is answered and acknowledged first
+            answering.join()
             self.client.disconnect()
             self.client.loop_stop()

@@ -22,6 +22,7 @@ def _logging() -> None:
 def _mqtt(args: argparse.Namespace) -> int:
     from service import features  # imported when used: every feature, paho
     from transports.mqtt import Bridge, MqttConfig, broker_address
+    from transports.mqtt_workers import serve_workers
 
     settings = get_settings()
     url = args.broker or settings.mqtt_url
@@ -37,9 +38,14 @@ def _mqtt(args: argparse.Namespace) -> int:
         batch=settings.transport_batch,
         max_bytes=settings.max_body_bytes,
     )
+    if args.workers < 1:
+        return fail(f"--workers must be at least 1, not {args.workers}")
     features.install()  # the same handler table as the HTTP app
     _logging()
-    Bridge(get_sessionmaker(), config).serve()
+    if args.workers == 1:
+        Bridge(get_sessionmaker(), config).serve()
+    else:  # each worker process opens its own database connections
+        serve_workers(lambda one: Bridge(get_sessionmaker(), one).serve(), config, args.workers)
     return 0
 
 
@@ -71,6 +77,12 @@ def register(sub: Any) -> None:
         "mqtt", help="bridge device events from an MQTT 5 broker (ack after commit)"
     )
     mqtt.add_argument("--broker", help="mqtt://HOST:PORT (default: DEPOT_MQTT_URL)")
+    mqtt.add_argument(
+        "--workers",
+        type=int,
+        default=1,
+        help="bridge processes sharing the subscription, client ids CLIENT_ID-1..N (default 1)",
+    )
     mqtt.set_defaults(func=_mqtt)
     consume = sub.add_parser(
         "consume", help="consume device events from NATS JetStream (ack after commit)"

@@ -15,22 +15,29 @@ state, these events included, with ``depot replay``.
 from __future__ import annotations
 
 import json
+import os
+import signal
 import time
 from collections import Counter
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 from sqlalchemy import create_engine, text
 
 from tests.reliability.conftest import report
 from tests.transports.conftest import Line
-from tests.transports.tkit import Key, Process
+from tests.transports.tkit import Key, Process, forget_session, until
 
 # MQTT: under Mosquitto's stock max_queued_messages (1000) for the bridge's offline session.
-BACKLOG = {"mqtt": 800, "nats": 1500}
+BACKLOG = {"mqtt": 800, "nats": 1500, "mqttw": 800}
 KILL_AFTER_ROWS = 1  # the first commit of the restarted process
 WITHIN_S = 120.0
-OCCURRED_AT = {"mqtt": "2026-11-23T04:00:00Z", "nats": "2026-11-23T04:30:00Z"}
+OCCURRED_AT = {
+    "mqtt": "2026-11-23T04:00:00Z",
+    "nats": "2026-11-23T04:30:00Z",
+    "mqttw": "2026-11-23T05:00:00Z",
+}
 
 
 def backlog_prefix(transport: str) -> str:
@@ -161,3 +168,56 @@ def test_consumer_killed_mid_backlog_loses_and_doubles_nothing(
         _settle(request, line, "nats", messages, at_kill, rows)
 
     _with_rows(line, "nats", run)
+
+
+def _children(process: Process) -> list[int]:
+    """The worker processes ``depot mqtt --workers N`` started (Linux /proc)."""
+    assert process.process is not None
+    pid = process.process.pid
+    with open(f"/proc/{pid}/task/{pid}/children") as f:
+        return [int(child) for child in f.read().split()]
+
+
+def test_a_bridge_worker_killed_mid_backlog_loses_and_doubles_nothing(
+    request: pytest.FixtureRequest, line: Line, tmp_path: Path
+) -> None:
+    """``depot mqtt --workers 2``: one worker SIGKILLed at the first commit; its supervisor
+    starts it again under the same client id, it resumes its session and gets back what it
+    had not acknowledged. (The line's own bridge shares the subscription and takes its part
+    when it comes back.)"""
+    messages = _messages(line, "mqttw")
+    client_id = f"{line.names.client_id}-w"
+    env = {**line.env, "DEPOT_MQTT_CLIENT_ID": client_id}
+    workers = Process(env, tmp_path / "mqtt-workers.log", "mqtt", "--workers", "2",
+                      ready="subscribed to")  # fmt: skip
+
+    def run(rows: Rows) -> None:
+        line.bridge.stop()
+        workers.start()  # the workers' sessions subscribe, then wait offline for the backlog
+        until(lambda: workers.log_text().count("subscribed to") >= 2, within=60,
+              what="both workers subscribed")  # fmt: skip
+        workers.stop()
+        for info in [line.mqtt.publish(*m) for m in messages]:
+            info.wait_for_publish(30)
+        workers.launch()
+        deadline = time.monotonic() + WITHIN_S
+        while rows.counts()[0] < KILL_AFTER_ROWS or len(_children(workers)) < 2:
+            assert time.monotonic() < deadline, f"nothing stored in {WITHIN_S} s"
+            time.sleep(0.005)
+        victim = _children(workers)[0]
+        os.kill(victim, signal.SIGKILL)
+        stored = rows.counts()[0]
+        at_kill = {"stored_at_kill": stored, "in_flight_at_kill": len(messages) - stored}
+        until(lambda: victim not in _children(workers) and len(_children(workers)) == 2,
+              within=60, what="the killed worker started again")  # fmt: skip
+        line.bridge.start()  # takes the part the broker gave the line's own session
+        _settle(request, line, "mqttw", messages, at_kill, rows)
+
+    try:
+        _with_rows(line, "mqttw", run)
+    finally:
+        workers.stop()
+        if line.bridge.process is None or line.bridge.process.poll() is not None:
+            line.bridge.start()  # the package's later tests need the line's bridge
+        for k in (1, 2):
+            forget_session(f"{client_id}-{k}")

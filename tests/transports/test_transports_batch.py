@@ -15,10 +15,10 @@ from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from core.auth import device_cache
-from ingest import service
 from service import features
 from tests.reliability.conftest import ADMIN_HEADERS
 from tests.transports.conftest import Line
+from transports import envelope
 from transports.envelope import Message, handle_batch
 
 LIMIT = 4096
@@ -94,20 +94,16 @@ def test_a_batch_that_fails_together_is_redone_message_by_message(
     """The together path fails for one device (as a value the database refuses would):
     the others are still stored once, and only the message that fails by itself is
     answered 500 (unacknowledged over NATS, to come again)."""
-    real_batch, real_event = service.accept_batch, service.accept_event
+    real = envelope.accept_batches
 
-    def poisoned_batch(session: Session, device: Any, items: Any, **kw: Any) -> Any:
-        if device.id == OTHER:
+    def poisoned(session: Session, batches: Any, **kw: Any) -> Any:
+        """Fails whenever the poisoned event is among those stored: the whole batch first,
+        then that message by itself."""
+        if any(i.get("event_id") == "bad-redo-poison" for b in batches for i in b.items):
             raise ValueError("poisoned")
-        return real_batch(session, device, items, **kw)
+        return real(session, batches, **kw)
 
-    def poisoned_event(session: Session, device: Any, payload: Any, **kw: Any) -> Any:
-        if payload.get("event_id") == "bad-redo-poison":
-            raise ValueError("poisoned")
-        return real_event(session, device, payload, **kw)
-
-    monkeypatch.setattr(service, "accept_batch", poisoned_batch)
-    monkeypatch.setattr(service, "accept_event", poisoned_event)
+    monkeypatch.setattr(envelope, "accept_batches", poisoned)
     key, other = _keys(line)[SENDER], _keys(line)[OTHER]
     batch = [
         Message(SENDER, key, _heartbeat("bad-redo-1")),

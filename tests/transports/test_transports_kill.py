@@ -42,7 +42,11 @@ from tests.transports.tkit import Key, until
 ROUNDS = 4  # kills in rounds 1, 2 and 3
 PHASE_WITHIN_S = 90.0  # bound on one phase, kills and restarts included
 EVIDENCE = 1  # the phase with the most events (readers, heartbeats)
-OTHER_TESTS = ("bad-", "backlog-")  # event ids of the package's earlier tests, same database
+OTHER_TESTS = (
+    "bad-",
+    "backlog-",
+    "late-",
+)  # event ids of the package's earlier tests, same database
 
 
 def transport_of(index: int, device: Device) -> str:
