@@ -25,7 +25,8 @@ local prefix = "%(prefix)s"
 local batch = %(batch)d
 local counter = 0
 local threads = 0
-local me = 0
+-- ``me`` is a global that setup() gives each thread's own Lua state; a ``local me`` here would
+-- shadow it, and every thread would then send the same event_ids (half the load duplicates).
 
 function setup(thread)
   threads = threads + 1

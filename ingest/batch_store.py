@@ -11,6 +11,7 @@ from core.errors import Conflict, Forbidden, Unprocessable
 from core.models import Device
 from ingest.checks import check_device_may_send, check_section, parse_event
 from ingest.handlers import Derivation, check_derivable, derive
+from ingest.holding import holding
 from ingest.rows import as_raw, insert_many, raw_values, write_answers
 from ingest.store import answer_now, derive_new, duplicate
 
@@ -72,6 +73,13 @@ def accept_batch(
     PostgreSQL; the unique key still decides duplicates), then they are derived one by one in
     the batch's order, and the derived answers are written with one executemany.
     """
+    with holding(session):
+        return _accept_batch(session, device, items, transport)
+
+
+def _accept_batch(
+    session: Session, device: Device, items: list[Any], transport: str
+) -> list[dict[str, Any]]:
     results, accepted = _validated(session, device, items)
     first: dict[str, tuple[int, Any, dict[str, Any]]] = {}
     repeats = []

@@ -10,6 +10,7 @@ from core.errors import DepotError
 from core.models import Device
 from ingest.checks import check_section
 from ingest.handlers import Derivation, check_derivable, derive
+from ingest.holding import holding
 from ingest.rows import as_raw, insert_many, raw_values, write_answers
 from ingest.store import answer_now, duplicate
 
@@ -30,6 +31,13 @@ def store_group(
     group back and stores every item by itself (:func:`store_validated`, with the savepoint
     that keeps a raw event whose derivation fails). The caller commits.
     """
+    with holding(session):
+        return _store_group(session, items)
+
+
+def _store_group(
+    session: Session, items: list[tuple[Device, Any, dict[str, Any]]]
+) -> list[tuple[int, dict[str, Any]] | BaseException]:
     outcomes: list[tuple[int, dict[str, Any]] | BaseException | None] = [None] * len(items)
     order = sorted(range(len(items)), key=lambda i: _lock_order(items[i]))
     rows: dict[tuple[str, str], dict[str, Any]] = {}
