@@ -15,7 +15,7 @@ from typing import Any
 from sqlalchemy.orm import Session
 
 from core.models import Device
-from ingest.liveness import touch
+from ingest.liveness import seen
 from ingest.models import RawEvent
 from ingest.schemas import ALL_EVENT_MODELS, EventBase, kind_of
 
@@ -71,16 +71,18 @@ def has_handlers(kind: str) -> bool:
 
 def derive(derivation: Derivation) -> dict[str, Any]:
     """Run every handler of the event's kind; merge what they report for the client."""
+    result: dict[str, Any] = {}
+    for handler in HANDLERS.get(derivation.raw.kind, ()):
+        result.update(handler(derivation) or {})
     # Liveness counts from when the server received the event, not the device's clock; it has
     # a granularity step: a device sending many events a second need not rewrite its row for
-    # each one (decisions read staleness from the raw events' receive times).
-    touch(
+    # each one (decisions read staleness from the raw events' receive times). After the
+    # handlers: the device's row is locked after the section a handler locks (lock order; see
+    # ``liveness.touched_at_end``), and a handler that fails leaves no trace, as before.
+    seen(
         derivation.session,
         derivation.device,
         derivation.raw.received_at,
         replaying=derivation.replaying,
     )
-    result: dict[str, Any] = {}
-    for handler in HANDLERS.get(derivation.raw.kind, ()):
-        result.update(handler(derivation) or {})
     return result

@@ -46,7 +46,14 @@ def duplicate(
     """200 with the original answer, marked ``"status": "duplicate"``, for a retry of the same
     event (compared as validated, normalised events); 409 for another event."""
     write_answers(session, answers)  # a retry may follow its original in the same transaction
-    stored_digest, result = stored(session, device.id, event.event_id)
+    return answer_stored(device, event, body, stored(session, device.id, event.event_id))
+
+
+def answer_stored(
+    device: Device, event: Any, body: dict[str, Any], found: tuple[str, dict[str, Any]]
+) -> tuple[int, dict[str, Any]]:
+    """:func:`duplicate` given the stored (body hash, answer) of the event's id."""
+    stored_digest, result = found
     # Rows stored before the hash was normalised carry the hash of the text as received.
     if stored_digest not in (event_sha256(event), canonical_sha256(body)):
         raise Conflict(

@@ -29,8 +29,8 @@ def statements(session: Session) -> Iterator[list[str]]:
     seen: list[str] = []
     connection = session.connection()
 
-    def _record(conn: Any, cursor: Any, statement: str, *_: Any) -> None:
-        seen.append(" ".join(statement.split()))
+    def _record(conn: Any, cursor: Any, statement: str, parameters: Any, *_: Any) -> None:
+        seen.append(" ".join(statement.split()) + f" -- {parameters}")
 
     sa_event.listen(connection, "before_cursor_execute", _record)
     yield seen
@@ -73,3 +73,62 @@ def test_holding_keeps_loaded_rows_only_inside_the_block(
             pass
         assert held(session) > 0
     assert held(session) == 0
+
+
+def test_a_group_locks_its_sections_before_any_device_row_in_device_order(
+    client: TestClient, session: Session, statements: list[str]
+) -> None:
+    """Two workers' groups (or a group and a single event) must take row locks in one order,
+    else each waits for the other's device or section row: a deadlock, which costs the
+    database's deadlock timeout and a retry of every event of the group."""
+    build_line(client)
+    b_ac, a_ac = session.get_one(Device, "B-ac"), session.get_one(Device, "A-ac")
+    items = []
+    for i, device in enumerate((b_ac, a_ac, b_ac, a_ac)):
+        body = event(f"lo-{i}", "axle_count", section="AB", axles=4)
+        items.append((device, service.validate_event(device, body), body))
+    statements.clear()
+    service.store_group(session, items)
+    lock = next(i for i, s in enumerate(statements) if "FROM sections" in s)
+    touched = [i for i, s in enumerate(statements) if s.startswith("UPDATE devices")]
+    assert len(touched) == 2 and min(touched) > lock, statements
+    order = ["A-ac" if "A-ac" in statements[i] else "B-ac" for i in touched]
+    assert order == ["A-ac", "B-ac"], statements
+    seen = session.scalars(select(Device.last_seen_at).where(Device.id.in_(["A-ac", "B-ac"])))
+    assert all(at is not None for at in seen)
+
+
+def test_a_batch_sent_again_is_answered_with_one_look_up(
+    client: TestClient, session: Session, statements: list[str]
+) -> None:
+    """A device that lost the answer to a batch sends it again: every item is answered as a
+    duplicate with its original result, and a reused id with another body is refused, from
+    one look-up of the stored events, not one per event."""
+    build_line(client)
+    device = session.get_one(Device, "B-ac")
+    items = [event(f"again-{i}", "axle_count", section="AB", axles=4 * i) for i in range(20)]
+    first = service.accept_batch(session, device, items)
+    assert [r["status"] for r in first] == ["created"] * 20
+    changed = [*items[:-1], {**items[-1], "axles": 999}]
+    statements.clear()
+    again = service.accept_batch(session, device, changed)
+    assert [r["status"] for r in again] == ["duplicate"] * 19 + ["rejected"]
+    assert [r["result"] for r in again[:19]] == [
+        {**r["result"], "status": "duplicate"} for r in first[:19]
+    ]
+    assert again[-1]["error"]["status"] == 409
+    look_ups = [s for s in statements if s.startswith("SELECT") and "FROM raw_events" in s]
+    assert len(look_ups) == 1, look_ups
+
+
+def test_a_group_answers_retries_from_one_look_up(
+    client: TestClient, session: Session, statements: list[str]
+) -> None:
+    build_line(client)
+    items = _axle_counts(session, 6, "gr")
+    service.store_group(session, items)
+    statements.clear()
+    outcomes = service.store_group(session, [*items, items[0]])
+    assert [o[0] for o in outcomes if isinstance(o, tuple)] == [200] * 7
+    look_ups = [s for s in statements if s.startswith("SELECT") and "FROM raw_events" in s]
+    assert len(look_ups) <= 2, look_ups  # the group's, and the one for the repeat inside it
