@@ -8,6 +8,7 @@ is stored, and ``depot replay`` runs them again to rebuild derived tables.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -37,6 +38,7 @@ HandlerTable = Mapping[type[EventBase], Sequence[Handler]]
 # before anything is stored: they raise core.errors.Unprocessable (422) with the reason.
 Validator = Callable[[Session, Any], None]
 ValidatorTable = Mapping[type[EventBase], Sequence[Validator]]
+log = logging.getLogger("depot.ingest")
 # The installed table, indexed by kind (filled by `install`; empty means liveness only).
 HANDLERS: dict[str, tuple[Handler, ...]] = {}
 VALIDATORS: dict[str, tuple[Validator, ...]] = {}
@@ -62,6 +64,34 @@ def install(table: HandlerTable, validators: ValidatorTable | None = None) -> No
     HANDLERS.update({kind_of(model): tuple(handlers) for model, handlers in table.items()})
     VALIDATORS.clear()
     VALIDATORS.update({kind_of(model): tuple(v) for model, v in (validators or {}).items()})
+
+
+# Work a feature can do on an event before anything is stored: in a worker thread, outside the
+# database transaction and its locks (detection on an uploaded image, which takes a tenth of a
+# second of CPU). Its result may only save the handler work, never change what the handler
+# derives: replay runs the handlers without it and must reach the same state.
+Preparer = Callable[[Device, Any], None]
+PREPARERS: dict[str, Preparer] = {}
+
+
+def install_preparer(kind: str, preparer: Preparer) -> None:
+    """Register the preparer of events of ``kind`` (one per kind; the last one wins)."""
+    PREPARERS[kind] = preparer
+
+
+def prepare(device: Device, event: Any) -> None:
+    """Run the preparer of the event's kind, if any (call it off the event loop). A preparer
+    that fails changes nothing: the handler does the work itself (and a failure there is the
+    stored event's ``derive_error``, as without a preparer)."""
+    preparer = PREPARERS.get(event.kind)
+    if preparer is None:
+        return
+    try:
+        preparer(device, event)
+    except Exception:
+        log.exception(
+            "preparing %s of %s failed; the derivation does the work", event.kind, device.id
+        )
 
 
 def has_handlers(kind: str) -> bool:

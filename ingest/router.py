@@ -26,6 +26,7 @@ from ingest import service
 from ingest.batches import batch_events
 from ingest.commit_queue import committer_for
 from ingest.device_auth import EventDevice
+from ingest.handlers import prepare
 from ingest.payload import read_json
 from ingest.schemas import BatchResult, EventAck
 from ingest.snapshots import check_image, store_image
@@ -184,5 +185,10 @@ async def post_snapshot(
     event = await run_in_threadpool(service.validate_snapshot, session, device, payload)
     # The file goes to disk before the event: a stored event never points at a missing image.
     await run_in_threadpool(store_image, settings.image_dir, checked, data)
+    if session.in_transaction():
+        await run_in_threadpool(session.commit)  # nothing written yet; no connection held
+    # Detection runs here, in a thread and outside the transaction: the derivation, which
+    # holds the section's lock, then finds the verdict ready instead of computing it.
+    await run_in_threadpool(prepare, device, event)
     status, result = await run_in_threadpool(service.store_event, session, device, event, payload)
     return JSONResponse(result, status_code=status)
