@@ -8,10 +8,13 @@ stored verdict is the one replay computes from the image.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from fastapi.testclient import TestClient
+from PIL import Image
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -19,6 +22,7 @@ import ingest.handlers
 import ingest.service
 import tail_check
 from ingest.models import Snapshot
+from ingest.snapshots import load_bgr
 from service.clearance import tail
 from service.replay import replay
 from tests.service.linekit import build_line
@@ -91,3 +95,19 @@ def test_the_prepared_verdict_is_the_one_replay_computes(
         (s.id, s.verdict, s.score) for s in session.scalars(select(Snapshot).order_by(Snapshot.id))
     ]
     assert len(live) == 3 and again == live
+
+
+@pytest.mark.parametrize("mode", ["RGB", "L", "RGBA", "P"])
+def test_load_bgr_is_the_reversed_rgb_conversion(tmp_path: Path, mode: str) -> None:
+    """The faster decoding gives exactly the array of converting to RGB and reversing the
+    channels (every stored verdict was computed from that array)."""
+    rng = np.random.default_rng(7)
+    pixels = rng.integers(0, 256, (48, 64, 3), dtype=np.uint8)
+    image = Image.fromarray(pixels).convert(mode)
+    path = tmp_path / "image.png"
+    image.save(path)
+    with Image.open(path) as reopened:
+        expected = np.ascontiguousarray(np.asarray(reopened.convert("RGB"))[:, :, ::-1])
+    got = load_bgr(path)
+    assert got.dtype == np.uint8 and got.flags.c_contiguous
+    assert np.array_equal(got, expected)
