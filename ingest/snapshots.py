@@ -114,5 +114,4 @@ def load_bgr(path: Path) -> NDArray[np.uint8]:
     with Image.open(path) as image:
         image.load()
         rgb = np.asarray(image if image.mode == "RGB" else image.convert("RGB"))
-    bgr: NDArray[np.uint8] = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
-    return bgr
+    return np.asarray(cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), dtype=np.uint8)
