@@ -1,8 +1,9 @@
 """The load generator of the ingest benchmark: ``wrk`` with a Lua script, else a Python client.
 
 ``wrk`` comes from Debian: ``apt-get install -y wrk``. Both generators post the same bodies
-(unique ``event_id`` per request, device keys in rotation) for a fixed time with a fixed number
-of connections, and report requests, the p50/p99 latency and anything not acknowledged.
+(unique ``event_id`` per request, device keys in rotation, one request per device at a time,
+as devices send) for a fixed time with a fixed number of connections, and report requests,
+the p50/p99 latency and anything not acknowledged.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ LUA = r"""
 local keys = {%(keys)s}
 local prefix = "%(prefix)s"
 local batch = %(batch)d
+local nthreads = %(threads)d
 local counter = 0
 local threads = 0
 -- ``me`` is a global that setup() gives each thread's own Lua state; a ``local me`` here would
@@ -43,7 +45,9 @@ end
 
 request = function()
   counter = counter + 1
-  local key = keys[(counter + me) %% #keys + 1]
+  -- Thread ``me`` of ``nthreads`` takes every nthreads-th key in turn: the threads never share
+  -- a device, and one device has one request in flight at a time, as a device sends.
+  local key = keys[((counter - 1) * nthreads + me - 1) %% #keys + 1]
   local id = prefix .. "-" .. me .. "-" .. counter
   local body
   if batch == 0 then
@@ -65,6 +69,9 @@ done = function(summary, latency, requests)
     latency:percentile(50), latency:percentile(99)))
 end
 """
+
+
+WRK_THREADS = 2
 
 
 @dataclass(frozen=True)
@@ -89,12 +96,13 @@ def _wrk(
         "keys": ", ".join(f'"{k}"' for k in keys),
         "prefix": prefix,
         "batch": batch,
+        "threads": WRK_THREADS,
     }
     with tempfile.NamedTemporaryFile("w", suffix=".lua", delete=False) as handle:
         handle.write(script)
     try:
         done = subprocess.run(
-            ["wrk", "-t2", f"-c{connections}", f"-d{seconds:g}s", "--timeout", "30s",
+            ["wrk", f"-t{WRK_THREADS}", f"-c{connections}", f"-d{seconds:g}s", "--timeout", "30s",
              "-s", handle.name, url],
             capture_output=True, text=True, check=True, timeout=seconds + 60,
         )  # fmt: skip
@@ -145,7 +153,7 @@ async def _python(
             response = await client.post(
                 "/api/v1/events",
                 json=_body(f"{prefix}-{c}", n, batch),
-                headers={"X-Device-Key": keys[(n + c) % len(keys)]},
+                headers={"X-Device-Key": keys[(c + connections * n) % len(keys)]},
             )
             if response.status_code in (200, 201):
                 latencies.append(time.perf_counter() - start)
