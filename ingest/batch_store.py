@@ -10,10 +10,10 @@ from sqlalchemy.orm import Session
 from core.errors import Conflict, Forbidden, Unprocessable
 from core.models import Device
 from ingest.checks import check_device_may_send, check_section, parse_event
-from ingest.handlers import Derivation, check_derivable, derive
+from ingest.handlers import check_derivable
 from ingest.holding import holding
-from ingest.liveness import touched_at_end
-from ingest.rows import as_raw, insert_many, raw_values, stored_many, write_answers
+from ingest.liveness import seen, touched_at_end
+from ingest.rows import insert_many, raw_values, stored_many, write_answers
 from ingest.store import answer_now, answer_stored, derive_new, duplicate
 
 
@@ -116,7 +116,7 @@ def _accept_batch(
             continue
         values = rows[event.event_id]
         if values["result"]:
-            derive(Derivation(session, as_raw(raw_id, values), event, device))
+            seen(session, device, values["received_at"], replaying=False)  # liveness only
             result = values["result"]
         else:
             row = derive_new(session, device, event, raw_id, values)

@@ -11,7 +11,7 @@ from core.models import Device
 from ingest.checks import check_section
 from ingest.handlers import Derivation, check_derivable, derive
 from ingest.holding import holding
-from ingest.liveness import touched_at_end
+from ingest.liveness import seen, touched_at_end
 from ingest.rows import as_raw, insert_many, raw_values, stored_many, write_answers
 from ingest.store import answer_now, answer_stored, duplicate
 
@@ -73,11 +73,11 @@ def _store_group(
                 outcomes[index] = exc
             continue
         values = rows[(device.id, event.event_id)]
-        raw = as_raw(raw_id, values)
-        derived = derive(Derivation(session, raw, event, device))
-        if values["result"]:
+        if values["result"]:  # answered in the insert: liveness only
+            seen(session, device, values["received_at"], replaying=False)
             outcomes[index] = (201, values["result"])
             continue
+        derived = derive(Derivation(session, as_raw(raw_id, values), event, device))
         result = {"event_id": event.event_id, "status": "created", **derived}
         answers.append({"id": raw_id, "result": result, "derive_error": None})
         outcomes[index] = (201, result)

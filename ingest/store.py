@@ -18,7 +18,7 @@ from core.errors import Conflict
 from core.models import Device
 from ingest.checks import check_device_may_send, check_section, parse_event
 from ingest.handlers import Derivation, check_derivable, derive, has_handlers
-from ingest.liveness import restore_pending, snapshot_pending
+from ingest.liveness import restore_pending, seen, snapshot_pending
 from ingest.models import RawEvent
 from ingest.rows import (
     as_raw,
@@ -95,7 +95,7 @@ def store_event(
     if raw_id is None:
         return duplicate(session, device, event, body, pending)
     if answer is not None:
-        derive(Derivation(session, as_raw(raw_id, values), event, device))
+        seen(session, device, values["received_at"], replaying=False)  # liveness only
         return 201, answer
     row = derive_new(session, device, event, raw_id, values)
     pending.append(row)
