@@ -25,6 +25,7 @@ local keys = {%(keys)s}
 local prefix = "%(prefix)s"
 local batch = %(batch)d
 local nthreads = %(threads)d
+local single = "%(single)s"
 local counter = 0
 local threads = 0
 -- ``me`` is a global that setup() gives each thread's own Lua state; a ``local me`` here would
@@ -51,7 +52,7 @@ request = function()
   local id = prefix .. "-" .. me .. "-" .. counter
   local body
   if batch == 0 then
-    body = event(id, "axle_count")
+    body = event(id, single)
   else
     local parts = {}
     for n = 1, batch do parts[n] = event(id .. "-" .. n, "heartbeat") end
@@ -90,13 +91,21 @@ def have_wrk() -> bool:
 
 
 def _wrk(
-    url: str, keys: list[str], prefix: str, *, batch: int, connections: int, seconds: float
+    url: str,
+    keys: list[str],
+    prefix: str,
+    *,
+    batch: int,
+    connections: int,
+    seconds: float,
+    single: str,
 ) -> Round:
     script = LUA % {
         "keys": ", ".join(f'"{k}"' for k in keys),
         "prefix": prefix,
         "batch": batch,
         "threads": WRK_THREADS,
+        "single": single,
     }
     with tempfile.NamedTemporaryFile("w", suffix=".lua", delete=False) as handle:
         handle.write(script)
@@ -119,7 +128,9 @@ def _wrk(
     )
 
 
-def _body(prefix: str, n: int, batch: int) -> dict[str, object]:
+def _body(prefix: str, n: int, batch: int, single: str) -> dict[str, object]:
+    if batch == 0 and single == "heartbeat":
+        return {"event_id": f"{prefix}-{n}", "occurred_at": "2026-11-23T10:00:00Z", "kind": single}
     if batch == 0:
         return {
             "event_id": f"{prefix}-{n}",
@@ -138,7 +149,14 @@ def _body(prefix: str, n: int, batch: int) -> dict[str, object]:
 
 
 async def _python(
-    url: str, keys: list[str], prefix: str, *, batch: int, connections: int, seconds: float
+    url: str,
+    keys: list[str],
+    prefix: str,
+    *,
+    batch: int,
+    connections: int,
+    seconds: float,
+    single: str,
 ) -> Round:
     latencies: list[float] = []
     failed = 0
@@ -152,7 +170,7 @@ async def _python(
             start = time.perf_counter()
             response = await client.post(
                 "/api/v1/events",
-                json=_body(f"{prefix}-{c}", n, batch),
+                json=_body(f"{prefix}-{c}", n, batch, single),
                 headers={"X-Device-Key": keys[(c + connections * n) % len(keys)]},
             )
             if response.status_code in (200, 201):
@@ -170,12 +188,18 @@ async def _python(
 
 
 def drive(
-    url: str, keys: list[str], prefix: str, *, batch: int, connections: int, seconds: float
+    url: str,
+    keys: list[str],
+    prefix: str,
+    *,
+    batch: int,
+    connections: int,
+    seconds: float,
+    single: str = "axle_count",
 ) -> Round:
-    """One round of load; ``batch`` 0 posts single ``axle_count`` events, else batches of
-    ``batch`` heartbeats."""
+    """One round of load; ``batch`` 0 posts single events of kind ``single`` (``axle_count``
+    or ``heartbeat``), else batches of ``batch`` heartbeats."""
+    how = {"batch": batch, "connections": connections, "seconds": seconds, "single": single}
     if have_wrk():
-        return _wrk(url, keys, prefix, batch=batch, connections=connections, seconds=seconds)
-    return asyncio.run(
-        _python(url, keys, prefix, batch=batch, connections=connections, seconds=seconds)
-    )
+        return _wrk(url, keys, prefix, **how)  # type: ignore[arg-type]
+    return asyncio.run(_python(url, keys, prefix, **how))  # type: ignore[arg-type]
