@@ -1,8 +1,9 @@
 """The load generator of the ingest benchmark: ``wrk`` with a Lua script, else a Python client.
 
 ``wrk`` comes from Debian: ``apt-get install -y wrk``. Both generators post the same bodies
-(unique ``event_id`` per request, device keys in rotation) for a fixed time with a fixed number
-of connections, and report requests, the p50/p99 latency and anything not acknowledged.
+(unique ``event_id`` per request, device keys in rotation, one request per device at a time,
+as devices send) for a fixed time with a fixed number of connections, and report requests,
+the p50/p99 latency and anything not acknowledged.
 """
 
 from __future__ import annotations
@@ -23,9 +24,12 @@ LUA = r"""
 local keys = {%(keys)s}
 local prefix = "%(prefix)s"
 local batch = %(batch)d
+local nthreads = %(threads)d
+local single = "%(single)s"
 local counter = 0
 local threads = 0
-local me = 0
+-- ``me`` is a global that setup() gives each thread's own Lua state; a ``local me`` here would
+-- shadow it, and every thread would then send the same event_ids (half the load duplicates).
 
 function setup(thread)
   threads = threads + 1
@@ -42,11 +46,13 @@ end
 
 request = function()
   counter = counter + 1
-  local key = keys[(counter + me) %% #keys + 1]
+  -- Thread ``me`` of ``nthreads`` takes every nthreads-th key in turn: the threads never share
+  -- a device, and one device has one request in flight at a time, as a device sends.
+  local key = keys[((counter - 1) * nthreads + me - 1) %% #keys + 1]
   local id = prefix .. "-" .. me .. "-" .. counter
   local body
   if batch == 0 then
-    body = event(id, "axle_count")
+    body = event(id, single)
   else
     local parts = {}
     for n = 1, batch do parts[n] = event(id .. "-" .. n, "heartbeat") end
@@ -66,6 +72,9 @@ end
 """
 
 
+WRK_THREADS = 2
+
+
 @dataclass(frozen=True)
 class Round:
     """One timed round against one server: acknowledged requests and their latency."""
@@ -82,18 +91,27 @@ def have_wrk() -> bool:
 
 
 def _wrk(
-    url: str, keys: list[str], prefix: str, *, batch: int, connections: int, seconds: float
+    url: str,
+    keys: list[str],
+    prefix: str,
+    *,
+    batch: int,
+    connections: int,
+    seconds: float,
+    single: str,
 ) -> Round:
     script = LUA % {
         "keys": ", ".join(f'"{k}"' for k in keys),
         "prefix": prefix,
         "batch": batch,
+        "threads": WRK_THREADS,
+        "single": single,
     }
     with tempfile.NamedTemporaryFile("w", suffix=".lua", delete=False) as handle:
         handle.write(script)
     try:
         done = subprocess.run(
-            ["wrk", "-t2", f"-c{connections}", f"-d{seconds:g}s", "--timeout", "30s",
+            ["wrk", f"-t{WRK_THREADS}", f"-c{connections}", f"-d{seconds:g}s", "--timeout", "30s",
              "-s", handle.name, url],
             capture_output=True, text=True, check=True, timeout=seconds + 60,
         )  # fmt: skip
@@ -110,7 +128,9 @@ def _wrk(
     )
 
 
-def _body(prefix: str, n: int, batch: int) -> dict[str, object]:
+def _body(prefix: str, n: int, batch: int, single: str) -> dict[str, object]:
+    if batch == 0 and single == "heartbeat":
+        return {"event_id": f"{prefix}-{n}", "occurred_at": "2026-11-23T10:00:00Z", "kind": single}
     if batch == 0:
         return {
             "event_id": f"{prefix}-{n}",
@@ -129,7 +149,14 @@ def _body(prefix: str, n: int, batch: int) -> dict[str, object]:
 
 
 async def _python(
-    url: str, keys: list[str], prefix: str, *, batch: int, connections: int, seconds: float
+    url: str,
+    keys: list[str],
+    prefix: str,
+    *,
+    batch: int,
+    connections: int,
+    seconds: float,
+    single: str,
 ) -> Round:
     latencies: list[float] = []
     failed = 0
@@ -143,8 +170,8 @@ async def _python(
             start = time.perf_counter()
             response = await client.post(
                 "/api/v1/events",
-                json=_body(f"{prefix}-{c}", n, batch),
-                headers={"X-Device-Key": keys[(n + c) % len(keys)]},
+                json=_body(f"{prefix}-{c}", n, batch, single),
+                headers={"X-Device-Key": keys[(c + connections * n) % len(keys)]},
             )
             if response.status_code in (200, 201):
                 latencies.append(time.perf_counter() - start)
@@ -161,12 +188,18 @@ async def _python(
 
 
 def drive(
-    url: str, keys: list[str], prefix: str, *, batch: int, connections: int, seconds: float
+    url: str,
+    keys: list[str],
+    prefix: str,
+    *,
+    batch: int,
+    connections: int,
+    seconds: float,
+    single: str = "axle_count",
 ) -> Round:
-    """One round of load; ``batch`` 0 posts single ``axle_count`` events, else batches of
-    ``batch`` heartbeats."""
+    """One round of load; ``batch`` 0 posts single events of kind ``single`` (``axle_count``
+    or ``heartbeat``), else batches of ``batch`` heartbeats."""
+    how = {"batch": batch, "connections": connections, "seconds": seconds, "single": single}
     if have_wrk():
-        return _wrk(url, keys, prefix, batch=batch, connections=connections, seconds=seconds)
-    return asyncio.run(
-        _python(url, keys, prefix, batch=batch, connections=connections, seconds=seconds)
-    )
+        return _wrk(url, keys, prefix, **how)  # type: ignore[arg-type]
+    return asyncio.run(_python(url, keys, prefix, **how))  # type: ignore[arg-type]

@@ -16,6 +16,9 @@ import httpx
 from sqlalchemy import create_engine, text
 
 ADMIN_TOKEN = "bench-admin-token-0123456789abcdef"
+# How long a server may take to answer its readiness check: on a busy 2-core host the
+# workers import OpenCV, scikit-learn and the app for well over a minute.
+READY_WITHIN_S = 240
 LOCAL_POSTGRES = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
 
 
@@ -68,7 +71,7 @@ def running(command: list[str], env: dict[str, str], log_dir: Path, ready: str) 
     log = open(log_dir / "server.log", "w")  # noqa: SIM115 - closed below
     process = subprocess.Popen(command, env=env, stdout=log, stderr=log)
     try:
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + READY_WITHIN_S
         while time.monotonic() < deadline:
             try:
                 if httpx.get(ready, timeout=1).status_code == 200:

@@ -5,7 +5,8 @@ the floor (``bench/floor_app.py``: key check, pydantic, one ``INSERT … ON CONF
 RETURNING`` plus commit per request, one multi-row insert per batch), depot with group commit
 (the default) and depot with ``DEPOT_GROUP_COMMIT_MS=0``. The same load generator drives them in
 alternating rounds: ``wrk`` (install with ``apt-get install -y wrk``) with a Lua script, 32
-connections for single ``axle_count`` events, 8 connections for batches of 500 heartbeats; the
+connections for single ``axle_count`` events (and single ``heartbeat`` events, which no feature
+derives from: the price of ingest itself), 8 connections for batches of 500 heartbeats; the
 Python client in ``bench/_load.py`` when ``wrk`` is absent. Printed: events/s, p50, p99 per
 server and the ratio depot / floor (summed over the rounds). Then the snapshot path on its own:
 10 cameras upload a 1080p JPEG at once, upload → verdict stored (the answer is sent after the
@@ -83,16 +84,30 @@ def _line(name: str, rounds: list[Round], per_request: int) -> tuple[float, str]
     )
 
 
-def compare(servers: dict[str, tuple[str, list[str]]], *, batch: int, connections: int) -> None:
+def compare(
+    servers: dict[str, tuple[str, list[str]]],
+    *,
+    batch: int,
+    connections: int,
+    single: str = "axle_count",
+) -> None:
     """Alternating rounds against every server (url, device keys); prints rates and ratios."""
     rounds: dict[str, list[Round]] = {name: [] for name in servers}
     for n in range(ROUNDS):
         for name, (url, keys) in servers.items():  # alternating: drift hits every server alike
-            prefix = f"{name[:5]}-{batch}-{n}"
+            prefix = f"{name[:5]}-{batch}-{single[:2]}-{n}"
             rounds[name].append(
-                drive(url, keys, prefix, batch=batch, connections=connections, seconds=SECONDS)
+                drive(
+                    url,
+                    keys,
+                    prefix,
+                    batch=batch,
+                    connections=connections,
+                    seconds=SECONDS,
+                    single=single,
+                )
             )
-    what = "single axle_count events" if batch == 0 else f"batches of {batch} heartbeats"
+    what = f"single {single} events" if batch == 0 else f"batches of {batch} heartbeats"
     print(f"{what}, {connections} connections, {ROUNDS} rounds of {SECONDS:g} s:")
     rates = {}
     for name, result in rounds.items():
@@ -127,6 +142,8 @@ def main() -> None:
             "depot no group commit": (ungrouped, keys_nogc),
         }
         compare(servers, batch=0, connections=SINGLE_CONNECTIONS)
+        # The same without a derivation (liveness only): what ingest itself costs.
+        compare(servers, batch=0, connections=SINGLE_CONNECTIONS, single="heartbeat")
         compare(servers, batch=BATCH, connections=BATCH_CONNECTIONS)
         snapshot_latency(grouped, background_keys=keys)
 

@@ -10,9 +10,11 @@ from sqlalchemy.orm import Session
 from core.errors import Conflict, Forbidden, Unprocessable
 from core.models import Device
 from ingest.checks import check_device_may_send, check_section, parse_event
-from ingest.handlers import Derivation, check_derivable, derive
-from ingest.rows import as_raw, insert_many, raw_values, write_answers
-from ingest.store import answer_now, derive_new, duplicate
+from ingest.handlers import check_derivable
+from ingest.holding import holding
+from ingest.liveness import seen, touched_at_end
+from ingest.rows import insert_many, raw_values, stored_many, write_answers
+from ingest.store import answer_now, answer_stored, derive_new, duplicate
 
 
 def _rejected(event_id: Any, exc: Unprocessable | Conflict | Forbidden) -> dict[str, Any]:
@@ -53,11 +55,20 @@ def _validated(
 
 
 def _stored_item(
-    session: Session, device: Device, event: Any, body: dict[str, Any], answers: list[Any]
+    session: Session,
+    device: Device,
+    event: Any,
+    body: dict[str, Any],
+    answers: list[Any],
+    found: tuple[str, dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
-    """The batch item of an event stored before (a retry, or a reuse of its id)."""
+    """The batch item of an event stored before (a retry, or a reuse of its id); ``found``:
+    its stored (body hash, answer) when already looked up."""
     try:
-        _, result = duplicate(session, device, event, body, answers)
+        if found is None:
+            _, result = duplicate(session, device, event, body, answers)
+        else:
+            _, result = answer_stored(device, event, body, found)
     except Conflict as exc:
         return _rejected(event.event_id, exc)
     return {"event_id": event.event_id, "status": "duplicate", "result": result}
@@ -72,6 +83,13 @@ def accept_batch(
     PostgreSQL; the unique key still decides duplicates), then they are derived one by one in
     the batch's order, and the derived answers are written with one executemany.
     """
+    with holding(session), touched_at_end(session):
+        return _accept_batch(session, device, items, transport)
+
+
+def _accept_batch(
+    session: Session, device: Device, items: list[Any], transport: str
+) -> list[dict[str, Any]]:
     results, accepted = _validated(session, device, items)
     first: dict[str, tuple[int, Any, dict[str, Any]]] = {}
     repeats = []
@@ -87,15 +105,18 @@ def accept_batch(
         for _, event, body in first.values()
     }
     inserted = insert_many(session, list(rows.values()))
+    # Stored before this batch (a batch sent again): looked up together, in one query.
+    before = stored_many(session, [(device.id, e) for e in rows if (device.id, e) not in inserted])
     answers: list[dict[str, Any]] = []
     for index, event, body in first.values():
         raw_id = inserted.get((device.id, event.event_id))
         if raw_id is None:
-            results[index] = _stored_item(session, device, event, body, answers)
+            found = before.get((device.id, event.event_id))
+            results[index] = _stored_item(session, device, event, body, answers, found)
             continue
         values = rows[event.event_id]
         if values["result"]:
-            derive(Derivation(session, as_raw(raw_id, values), event, device))
+            seen(session, device, values["received_at"], replaying=False)  # liveness only
             result = values["result"]
         else:
             row = derive_new(session, device, event, raw_id, values)

@@ -10,8 +10,10 @@ from core.errors import DepotError
 from core.models import Device
 from ingest.checks import check_section
 from ingest.handlers import Derivation, check_derivable, derive
-from ingest.rows import as_raw, insert_many, raw_values, write_answers
-from ingest.store import answer_now, duplicate
+from ingest.holding import holding
+from ingest.liveness import seen, touched_at_end
+from ingest.rows import as_raw, insert_many, raw_values, stored_many, write_answers
+from ingest.store import answer_now, answer_stored, duplicate
 
 
 def _lock_order(item: tuple[Device, Any, dict[str, Any]]) -> tuple[str, str]:
@@ -30,6 +32,13 @@ def store_group(
     group back and stores every item by itself (:func:`store_validated`, with the savepoint
     that keeps a raw event whose derivation fails). The caller commits.
     """
+    with holding(session), touched_at_end(session):
+        return _store_group(session, items)
+
+
+def _store_group(
+    session: Session, items: list[tuple[Device, Any, dict[str, Any]]]
+) -> list[tuple[int, dict[str, Any]] | BaseException]:
     outcomes: list[tuple[int, dict[str, Any]] | BaseException | None] = [None] * len(items)
     order = sorted(range(len(items)), key=lambda i: _lock_order(items[i]))
     rows: dict[tuple[str, str], dict[str, Any]] = {}
@@ -44,6 +53,8 @@ def store_group(
         answer = answer_now(event)
         rows.setdefault((device.id, event.event_id), raw_values(device, event, body, answer=answer))
     inserted = insert_many(session, list(rows.values()))
+    # Stored before this group (retries): looked up together, in one query.
+    before = stored_many(session, [key for key in rows if key not in inserted])
     answers: list[dict[str, Any]] = []
     for index in order:
         if outcomes[index] is not None:
@@ -51,17 +62,22 @@ def store_group(
         device, event, body = items[index]
         raw_id = inserted.pop((device.id, event.event_id), None)
         if raw_id is None:  # stored before, or twice in this group
+            found = before.get((device.id, event.event_id))
             try:
-                outcomes[index] = duplicate(session, device, event, body, answers)
+                outcomes[index] = (
+                    duplicate(session, device, event, body, answers)
+                    if found is None
+                    else answer_stored(device, event, body, found)
+                )
             except DepotError as exc:
                 outcomes[index] = exc
             continue
         values = rows[(device.id, event.event_id)]
-        raw = as_raw(raw_id, values)
-        derived = derive(Derivation(session, raw, event, device))
-        if values["result"]:
+        if values["result"]:  # answered in the insert: liveness only
+            seen(session, device, values["received_at"], replaying=False)
             outcomes[index] = (201, values["result"])
             continue
+        derived = derive(Derivation(session, as_raw(raw_id, values), event, device))
         result = {"event_id": event.event_id, "status": "created", **derived}
         answers.append({"id": raw_id, "result": result, "derive_error": None})
         outcomes[index] = (201, result)

@@ -8,6 +8,7 @@ is stored, and ``depot replay`` runs them again to rebuild derived tables.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -15,7 +16,7 @@ from typing import Any
 from sqlalchemy.orm import Session
 
 from core.models import Device
-from ingest.liveness import touch
+from ingest.liveness import seen
 from ingest.models import RawEvent
 from ingest.schemas import ALL_EVENT_MODELS, EventBase, kind_of
 
@@ -37,6 +38,7 @@ HandlerTable = Mapping[type[EventBase], Sequence[Handler]]
 # before anything is stored: they raise core.errors.Unprocessable (422) with the reason.
 Validator = Callable[[Session, Any], None]
 ValidatorTable = Mapping[type[EventBase], Sequence[Validator]]
+log = logging.getLogger("depot.ingest")
 # The installed table, indexed by kind (filled by `install`; empty means liveness only).
 HANDLERS: dict[str, tuple[Handler, ...]] = {}
 VALIDATORS: dict[str, tuple[Validator, ...]] = {}
@@ -64,6 +66,34 @@ def install(table: HandlerTable, validators: ValidatorTable | None = None) -> No
     VALIDATORS.update({kind_of(model): tuple(v) for model, v in (validators or {}).items()})
 
 
+# Work a feature can do on an event before anything is stored: in a worker thread, outside the
+# database transaction and its locks (detection on an uploaded image, which takes a tenth of a
+# second of CPU). Its result may only save the handler work, never change what the handler
+# derives: replay runs the handlers without it and must reach the same state.
+Preparer = Callable[[Device, Any], None]
+PREPARERS: dict[str, Preparer] = {}
+
+
+def install_preparer(kind: str, preparer: Preparer) -> None:
+    """Register the preparer of events of ``kind`` (one per kind; the last one wins)."""
+    PREPARERS[kind] = preparer
+
+
+def prepare(device: Device, event: Any) -> None:
+    """Run the preparer of the event's kind, if any (call it off the event loop). A preparer
+    that fails changes nothing: the handler does the work itself (and a failure there is the
+    stored event's ``derive_error``, as without a preparer)."""
+    preparer = PREPARERS.get(event.kind)
+    if preparer is None:
+        return
+    try:
+        preparer(device, event)
+    except Exception:
+        log.exception(
+            "preparing %s of %s failed; the derivation does the work", event.kind, device.id
+        )
+
+
 def has_handlers(kind: str) -> bool:
     """Whether any feature derives state from events of ``kind`` (else: liveness only)."""
     return bool(HANDLERS.get(kind))
@@ -71,16 +101,18 @@ def has_handlers(kind: str) -> bool:
 
 def derive(derivation: Derivation) -> dict[str, Any]:
     """Run every handler of the event's kind; merge what they report for the client."""
+    result: dict[str, Any] = {}
+    for handler in HANDLERS.get(derivation.raw.kind, ()):
+        result.update(handler(derivation) or {})
     # Liveness counts from when the server received the event, not the device's clock; it has
     # a granularity step: a device sending many events a second need not rewrite its row for
-    # each one (decisions read staleness from the raw events' receive times).
-    touch(
+    # each one (decisions read staleness from the raw events' receive times). After the
+    # handlers: the device's row is locked after the section a handler locks (lock order; see
+    # ``liveness.touched_at_end``), and a handler that fails leaves no trace, as before.
+    seen(
         derivation.session,
         derivation.device,
         derivation.raw.received_at,
         replaying=derivation.replaying,
     )
-    result: dict[str, Any] = {}
-    for handler in HANDLERS.get(derivation.raw.kind, ()):
-        result.update(handler(derivation) or {})
     return result

@@ -18,6 +18,8 @@ a device looks stale at most that much early, never late.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from datetime import datetime, timedelta
 
 from sqlalchemy import Table, event, func, or_, select, update
@@ -84,6 +86,40 @@ def touch(session: Session, device: Device, received: datetime, *, replaying: bo
     new_bound = received if moved.rowcount else threshold  # type: ignore[attr-defined]
     if bound is None or new_bound > bound:
         pending[ident] = new_bound
+
+
+_LATER = "depot_touch_later"
+
+
+def seen(session: Session, device: Device, received: datetime, *, replaying: bool) -> None:
+    """:func:`touch` now, or at the end of the :func:`touched_at_end` block around it."""
+    later: list[tuple[Device, datetime]] | None = session.info.get(_LATER)
+    if later is None or replaying:
+        touch(session, device, received, replaying=replaying)
+    else:
+        later.append((device, received))
+
+
+@contextmanager
+def touched_at_end(session: Session) -> Iterator[None]:
+    """Apply the liveness rule of the events derived in the block when it ends, in device
+    order: the devices' rows are then locked after every section a derivation locked, and in
+    the same order by every transaction, so that two groups (or a group and a single event)
+    never wait for each other's device and section rows in a cycle (a deadlock, which costs
+    the database's deadlock timeout and a retry of every event of the group). Per device the
+    events keep their order, so the stored values are those of touching them one by one. On
+    an exception nothing is applied (the transaction is rolled back anyway)."""
+    if _LATER in session.info:
+        yield  # an outer block applies them
+        return
+    later: list[tuple[Device, datetime]] = []
+    session.info[_LATER] = later
+    try:
+        yield
+    finally:
+        session.info.pop(_LATER, None)
+    for device, received in sorted(later, key=lambda item: item[0].id):
+        touch(session, device, received, replaying=False)
 
 
 def snapshot_pending(session: Session) -> dict[tuple[str, str], datetime]:

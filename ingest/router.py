@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import time
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
@@ -26,11 +27,13 @@ from ingest import service
 from ingest.batches import batch_events
 from ingest.commit_queue import committer_for
 from ingest.device_auth import EventDevice
+from ingest.handlers import prepare
 from ingest.payload import read_json
 from ingest.schemas import BatchResult, EventAck
 from ingest.snapshots import check_image, store_image
 
 router = APIRouter(tags=["devices"])
+T = TypeVar("T")
 
 EVENT_BODY_DOC = {
     "requestBody": {
@@ -63,6 +66,17 @@ async def _read_limited(request: Request, limit: int) -> bytes:
     return b"".join(chunks)
 
 
+def _committed(store: Callable[..., T], session: Session, *args: Any) -> T:
+    """``store(session, *args)`` and the commit, in one worker thread. Committing here rather
+    than when the request's session is closed (after the answer is rendered, back on the
+    event loop) releases the rows it locked (the section, the device's liveness row) at
+    once instead of after the event loop's other work: concurrent events of one section or
+    device wait for those locks. The answer is still sent only after the commit."""
+    result = store(session, *args)
+    session.commit()
+    return result
+
+
 @router.post(
     "/events",
     openapi_extra=EVENT_BODY_DOC,
@@ -87,7 +101,7 @@ async def post_events(request: Request, session: DbSession, device: EventDevice)
     payload = read_json(body)
     events = batch_events(payload)
     if events is not None:
-        results = await run_in_threadpool(service.accept_batch, session, device, events)
+        results = await run_in_threadpool(_committed, service.accept_batch, session, device, events)
         metrics.batch_answered(events, results)
         return JSONResponse({"results": results}, status_code=200)
     try:
@@ -118,7 +132,7 @@ async def _single(
         max_events=settings.group_commit_max,
     )
     if committer is None:
-        return await run_in_threadpool(service.accept_event, session, device, payload)
+        return await run_in_threadpool(_committed, service.accept_event, session, device, payload)
     if large:
         event = await run_in_threadpool(service.validate_event, device, payload)
     else:
@@ -184,5 +198,12 @@ async def post_snapshot(
     event = await run_in_threadpool(service.validate_snapshot, session, device, payload)
     # The file goes to disk before the event: a stored event never points at a missing image.
     await run_in_threadpool(store_image, settings.image_dir, checked, data)
-    status, result = await run_in_threadpool(service.store_event, session, device, event, payload)
+    if session.in_transaction():
+        await run_in_threadpool(session.commit)  # nothing written yet; no connection held
+    # Detection runs here, in a thread and outside the transaction: the derivation, which
+    # holds the section's lock, then finds the verdict ready instead of computing it.
+    await run_in_threadpool(prepare, device, event)
+    status, result = await run_in_threadpool(
+        _committed, service.store_event, session, device, event, payload
+    )
     return JSONResponse(result, status_code=status)

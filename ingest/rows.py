@@ -122,6 +122,32 @@ def stored(session: Session, device_id: str, event_id: str) -> tuple[str, dict[s
     return row[0], row[1]
 
 
+def stored_many(
+    session: Session, keys: list[tuple[str, str]]
+) -> dict[tuple[str, str], tuple[str, dict[str, Any]]]:
+    """(body hash, answer) of events stored before, by (device, ``event_id``), in one query
+    (a batch sent again after a lost answer must not cost a round trip per event)."""
+    if not keys:
+        return {}
+    found: dict[tuple[str, str], tuple[str, dict[str, Any]]] = {}
+    devices = sorted({device for device, _ in keys})
+    for device in devices:
+        ids = [event_id for d, event_id in keys if d == device]
+        for start in range(0, len(ids), STORED_CHUNK):
+            rows = session.execute(
+                select(RAW.c.event_id, RAW.c.body_sha256, RAW.c.result).where(
+                    RAW.c.device_id == device, RAW.c.event_id.in_(ids[start : start + STORED_CHUNK])
+                )
+            )
+            found.update({(device, e): (h, r) for e, h, r in rows})
+    return found
+
+
+# Event ids per look-up of stored events (SQLite binds at most 32,766 parameters; a batch has
+# at most 1000 events).
+STORED_CHUNK = 1000
+
+
 def write_answers(session: Session, answers: list[dict[str, Any]]) -> None:
     """Store derived answers (``id``, ``result``, ``derive_error``) with one executemany,
     which psycopg sends as one pipeline; cleared afterwards."""

@@ -18,7 +18,7 @@ from core.errors import Conflict
 from core.models import Device
 from ingest.checks import check_device_may_send, check_section, parse_event
 from ingest.handlers import Derivation, check_derivable, derive, has_handlers
-from ingest.liveness import restore_pending, snapshot_pending
+from ingest.liveness import restore_pending, seen, snapshot_pending
 from ingest.models import RawEvent
 from ingest.rows import (
     as_raw,
@@ -46,7 +46,14 @@ def duplicate(
     """200 with the original answer, marked ``"status": "duplicate"``, for a retry of the same
     event (compared as validated, normalised events); 409 for another event."""
     write_answers(session, answers)  # a retry may follow its original in the same transaction
-    stored_digest, result = stored(session, device.id, event.event_id)
+    return answer_stored(device, event, body, stored(session, device.id, event.event_id))
+
+
+def answer_stored(
+    device: Device, event: Any, body: dict[str, Any], found: tuple[str, dict[str, Any]]
+) -> tuple[int, dict[str, Any]]:
+    """:func:`duplicate` given the stored (body hash, answer) of the event's id."""
+    stored_digest, result = found
     # Rows stored before the hash was normalised carry the hash of the text as received.
     if stored_digest not in (event_sha256(event), canonical_sha256(body)):
         raise Conflict(
@@ -88,7 +95,7 @@ def store_event(
     if raw_id is None:
         return duplicate(session, device, event, body, pending)
     if answer is not None:
-        derive(Derivation(session, as_raw(raw_id, values), event, device))
+        seen(session, device, values["received_at"], replaying=False)  # liveness only
         return 201, answer
     row = derive_new(session, device, event, raw_id, values)
     pending.append(row)

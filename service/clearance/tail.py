@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
 from pathlib import Path
 from typing import Any
 
@@ -9,7 +11,7 @@ from sqlalchemy import select
 
 import tail_check
 from core.settings import get_settings
-from ingest.handlers import Derivation
+from ingest.handlers import Derivation, install_preparer
 from ingest.models import Snapshot
 from ingest.snapshots import load_bgr, stored_image
 from service.clearance.evidence import run_at, side_of
@@ -39,6 +41,40 @@ def _departure_reference(d: Derivation, run_id: int | None) -> Snapshot | None:
     )
 
 
+# Detections prepared before the event is stored, by (device, image hash): at most this many
+# (an upload's detection is used by its own derivation a moment later; a few in flight per
+# camera at most).
+PREPARED_MAX = 64
+_prepared: OrderedDict[tuple[str, str], tuple[Any, dict[str, Any]]] = OrderedDict()
+_prepared_lock = threading.Lock()
+
+
+def prepare_snapshot(device: Any, event: Any) -> None:
+    """Detect the disc on an uploaded (already stored) image before its event is stored: in
+    a worker thread, outside the transaction and the section lock (see ``ingest.handlers``)."""
+    profile = camera_profile(device.id)
+    path = stored_image(get_settings().image_dir, event.image_sha256, event.content_type)
+    detection = tail_check.detect(load_bgr(path), profile).to_dict()
+    with _prepared_lock:
+        _prepared[(device.id, event.image_sha256)] = (profile, detection)
+        while len(_prepared) > PREPARED_MAX:
+            _prepared.popitem(last=False)
+
+
+def _detection(device_id: str, sha256: str, image: Any, profile: Any) -> dict[str, Any]:
+    """The single-camera detection: the prepared one when it was made with the same profile
+    (the same image and profile give the same detection, so replay, which computes it, agrees),
+    else computed now."""
+    with _prepared_lock:
+        prepared = _prepared.pop((device_id, sha256), None)
+    if prepared is not None and prepared[0] == profile:
+        return dict(prepared[1])
+    return tail_check.detect(image(), profile).to_dict()
+
+
+install_preparer("tail_snapshot", prepare_snapshot)
+
+
 def tail_snapshot(d: Derivation) -> dict[str, Any]:
     event = d.event
     row = evidence_row(
@@ -50,15 +86,16 @@ def tail_snapshot(d: Derivation) -> dict[str, Any]:
         height=event.height,
         size_bytes=event.size_bytes,
     )
-    image = load_bgr(snapshot_file(row))
     profile = camera_profile(d.device.id)
-    result = tail_check.detect(image, profile)
+    detection = _detection(
+        d.device.id, event.image_sha256, lambda: load_bgr(snapshot_file(row)), profile
+    )
     # On an arrival image, the same run's departure image (if any) is the reference.
     run = run_at(d.session, event.section, event.occurred_at, d.device.station)
     arriving = run is not None and side_of(run, d.device.station) == "arrival"
     reference = _departure_reference(d, run.id) if run is not None and arriving else None
-    detection: dict[str, Any] = result.to_dict()
     if reference is not None:
+        image = load_bgr(snapshot_file(row))
         compared = tail_check.compare(load_bgr(snapshot_file(reference)), image, profile=profile)
         detection = {
             **compared.to_dict(),
