@@ -25,6 +25,8 @@ from core.errors import Conflict, Forbidden, Unprocessable
 from core.models import Device
 from ingest.checks import check_device_may_send, check_section, parse_event
 from ingest.handlers import Derivation, check_derivable, derive
+from ingest.holding import holding
+from ingest.liveness import touched_at_end
 from ingest.rows import as_raw, insert_many, raw_values, write_answers
 from ingest.store import answer_now, derive_new, duplicate
 
@@ -102,7 +104,17 @@ def accept_batches(
 ) -> list[list[Result]]:
     """The ``results`` list of ``accept_batch`` for each batch, all in ``session`` (the caller
     commits). Derivations run in the order of ``batches`` (give them in the order the section
-    locks are taken, as the group commit does); each device's items in their own order."""
+    locks are taken, as the group commit does); each device's items in their own order. As in
+    the HTTP group commit, loaded rows are kept for the whole call and the devices' liveness
+    rows are written at its end in device order, so that a broker batch and an HTTP group never
+    lock section and device rows in a cycle."""
+    with holding(session), touched_at_end(session):
+        return _accept_batches(session, batches, transport=transport)
+
+
+def _accept_batches(
+    session: Session, batches: Sequence[DeviceBatch], *, transport: str
+) -> list[list[Result]]:
     results: list[list[Result | None]] = [[None] * len(b.items) for b in batches]
     first: dict[tuple[str, str], _Entry] = {}
     repeats: list[_Entry] = []
