@@ -11,12 +11,12 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from core.models import Section
+from core.timefmt import elapsed
 from ingest import liveness
 from service.clearance.models import Run
 from service.clearance.rules import SWEEP_FROM
 from service.clearance.service import ACTION_STATES
 from service.clearance.views import QUEUE_STATES, run_out, section_out
-from service.review.timefmt import duration
 
 STATE_WORDS = {
     "free": "free",
@@ -110,7 +110,7 @@ def _since(section: dict[str, Any], now: datetime) -> str:
     since = section["state_since"]
     if not since:
         return words
-    return f"{words} for {duration((now - datetime.fromisoformat(since)).total_seconds())}"
+    return f"{words} for {elapsed(since, now)}"
 
 
 def _title(queue: list[dict[str, Any]]) -> str:
