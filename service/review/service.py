@@ -47,6 +47,9 @@ CONSIST_WORDS = {
     "unknown": "cannot tell (cars not all identified)",
 }
 DECIDERS = ("dispatcher", "admin")
+# Devices that report now and then by nature (marking, bench, on-board): never listed as stale
+# (nor counted by ``/metrics``, which counts this list).
+OCCASIONAL_KINDS = ("marking_station", "test_bench", "onboard_unit")
 # Clearing from these states overrides evidence of a loss: the page asks once more.
 CONFIRM_CLEAR = {"alarm": "in ALARM", "awaiting_sweep": "waiting for its sweep train"}
 
@@ -76,7 +79,7 @@ def stale_devices(session: Session, now: datetime) -> list[dict[str, Any]]:
             "last_seen_at": device.last_seen_at,
         }
         for device in liveness.stale_devices(session, now)
-        if device.kind not in ("marking_station", "test_bench", "onboard_unit")
+        if device.kind not in OCCASIONAL_KINDS
     ]
 
 
