@@ -40,7 +40,14 @@ ACTION_LABELS = {
     "keep_blocked": "Keep blocked",
     "sweep": "Clear after a sweep train",
 }
-ALERT_STATES = ("alarm", "review")  # states that sound and notify when they appear
+ALERT_STATES = ("alarm", "review")
+# The queue's order: most urgent first (then oldest first within a state).
+QUEUE_SEVERITY = (
+    "alarm",
+    "review",
+    "awaiting_confirmation",
+    "blocked",
+)  # states that sound and notify when they appear
 CONSIST_WORDS = {
     "identical": "same cars, same order",
     "missing": "cars missing",
@@ -116,6 +123,14 @@ def _since(section: dict[str, Any], now: datetime) -> str:
     return f"{words} for {elapsed(since, now)}"
 
 
+def queue_order(queue: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The queue as a dispatcher works it: alarms first, then runs that need review, then the
+    rest (awaiting confirmation, blocked), each oldest first — a new alarm is never below an
+    older review."""
+    rank = {state: i for i, state in enumerate(QUEUE_SEVERITY)}
+    return sorted(queue, key=lambda s: (rank.get(s["state"], len(rank)), s["state_since"] or ""))
+
+
 def _title(queue: list[dict[str, Any]]) -> str:
     alarms = [s["id"] for s in queue if s["state"] == "alarm"]
     if alarms:
@@ -129,8 +144,9 @@ def build_screen(
     sections = [
         section_out(session, s) for s in session.scalars(select(Section).order_by(Section.id))
     ]
-    queue = [s for s in sections if s["state"] in QUEUE_STATES and s["run"] is not None]
-    queue.sort(key=lambda s: s["state_since"] or "")
+    queue = queue_order(
+        [s for s in sections if s["state"] in QUEUE_STATES and s["run"] is not None]
+    )
     for s in queue:
         s["since_words"] = _since(s, now)
     recent_runs = session.scalars(select(Run).order_by(Run.id.desc()).limit(15)).all()
