@@ -6,13 +6,15 @@ from __future__ import annotations
 
 from typing import Any
 
+import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from ingest.batches import batch_events
-from ingest.models import RawEvent
+from ingest.models import RawEvent, Snapshot
 from tests.service.linekit import build_line, event
+from tests.service.scenario import jpeg
 
 
 def _raw_count(session: Session) -> int:
@@ -44,7 +46,6 @@ def test_a_batch_item_that_is_not_an_object_is_rejected_alone(
 
 def test_the_batch_shape_is_still_refused_whole() -> None:
     """What is not a batch of 1 to 1000 items is refused as a whole (every transport)."""
-    import pytest
 
     from core.errors import Unprocessable
 
@@ -58,3 +59,50 @@ def test_the_batch_shape_is_still_refused_whole() -> None:
     ):
         with pytest.raises(Unprocessable, match="invalid batch"):
             batch_events(shape)
+
+
+def test_a_snapshot_form_field_the_protocol_does_not_name_is_refused() -> None:
+    """protocol.md names the form fields event_id, occurred_at, section and the file image; an
+    event refuses an unknown field (422), so does the snapshot form, naming the field (a
+    ``camera`` or ``occured_at`` field silently dropped leaves its integrator unaware)."""
+
+    from core.errors import Unprocessable
+    from ingest.snapshots import check_form_fields
+
+    check_form_fields(["event_id", "occurred_at", "section", "image"])
+    check_form_fields(["image", "section"])  # a missing field is said by its own check
+    with pytest.raises(Unprocessable) as refused:
+        check_form_fields(["event_id", "occurred_at", "section", "image", "occured_at", "camera"])
+    assert "'camera', 'occured_at'" in refused.value.detail
+    assert "event_id, occurred_at, section and the file image" in refused.value.detail
+    assert [e["loc"] for e in refused.value.errors or []] == [
+        ["body", "camera"],
+        ["body", "occured_at"],
+    ]
+
+
+WIRING = (
+    "needs one line in ingest/router.py (owned by the ingest-floor helper): in post_snapshot's"
+    " `async with request.form(...)` block, `check_form_fields(form.keys())` first"
+)
+
+
+@pytest.mark.skip(reason=WIRING)
+def test_the_snapshot_upload_names_an_unknown_form_field(
+    client: TestClient, session: Session
+) -> None:
+    keys = build_line(client)
+    form = {
+        "event_id": "s-x",
+        "occurred_at": "2026-11-23T10:41:00Z",
+        "section": "AB",
+        "camera": "B-cam-2",
+    }
+    files = {"image": ("tail.jpg", jpeg(disc=True), "image/jpeg")}
+    answer = client.post("/api/v1/snapshots", data=form, files=files, headers=keys["B-cam"])
+    assert answer.status_code == 422, answer.text
+    assert answer.headers["content-type"] == "application/problem+json"
+    assert "'camera'" in answer.json()["detail"]
+    assert answer.json()["errors"] == [{"loc": ["body", "camera"], "msg": "unknown form field"}]
+    assert session.scalar(select(func.count()).select_from(Snapshot)) == 0
+    assert _raw_count(session) == 0
