@@ -12,6 +12,7 @@ from sqlalchemy.orm import Session
 from tests.conftest import ADMIN
 from tests.service.reviewkit import TRANSIT
 from tests.service.scenario import T0, Line, jpeg
+from tests.service.test_service_fleet_data_rules import url  # noqa: F401 (fixture)
 from tests.service.test_service_review_screen import login
 
 MISMATCH = "arrival reported train 2014, departure train 2041"
@@ -70,3 +71,26 @@ def test_the_decision_answers_are_documented(
     )
     again = client.post(f"/api/v1/runs/{run}/decision", json=body, headers=dispatcher)
     assert again.status_code == 409 and "already" in again.json()["detail"], again.text
+
+
+def test_migration_0010_fills_the_arrival_train_of_existing_runs(url: str) -> None:  # noqa: F811
+    """Runs decided before 0010 get their arrival's train number from its raw event, so that
+    their next re-decision keeps the mismatch too."""
+    import sqlalchemy as sa
+    from alembic import command
+
+    from core.database import make_engine
+    from service.migrate import alembic_config, upgrade
+    from tests.conftest import app_on
+    from tests.service.linekit import build_line
+
+    upgrade(url)
+    engine = make_engine(url)
+    with TestClient(app_on(engine)) as client:
+        run = _mismatched_run(Line(client, build_line(client)))
+    command.downgrade(alembic_config(url), "0009_measurement_unique")
+    upgrade(url)
+    with engine.connect() as connection:
+        trains = connection.execute(sa.text("SELECT id, train, arrival_train FROM runs")).all()
+    assert [tuple(t) for t in trains] == [(run, "2041", "2014")]
+    engine.dispose()
