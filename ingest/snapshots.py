@@ -7,6 +7,7 @@ import io
 import os
 import tempfile
 import warnings
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +29,24 @@ class CheckedImage:
     suffix: str
     width: int
     height: int
+
+
+# The multipart form of POST /snapshots (protocol.md): these fields and the file, nothing else.
+FORM_FIELDS = ("event_id", "occurred_at", "section")
+FORM_FILE = "image"
+
+
+def check_form_fields(names: Iterable[str]) -> None:
+    """Refuse (422, naming them) form fields the protocol does not name: an event refuses an
+    unknown field, and a field silently dropped (``camera``, a misspelt ``occured_at``) would
+    leave the device's integrator believing it was stored. Missing fields are said elsewhere."""
+    unknown = sorted(set(names) - {*FORM_FIELDS, FORM_FILE})
+    if unknown:
+        raise Unprocessable(
+            f"unknown form field(s) {', '.join(map(repr, unknown))}; a snapshot has the fields"
+            f" {', '.join(FORM_FIELDS)} and the file {FORM_FILE} (protocol.md), nothing else",
+            errors=[{"loc": ["body", name], "msg": "unknown form field"} for name in unknown],
+        )
 
 
 def _field_error(msg: str) -> list[dict[str, object]]:

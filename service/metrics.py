@@ -8,26 +8,23 @@ past their heartbeat, sections by state and the review queue (runs waiting for a
 from __future__ import annotations
 
 import hmac
-from datetime import timedelta
 
 from fastapi import APIRouter, Request
 from fastapi.responses import PlainTextResponse
-from sqlalchemy import func, or_, select
+from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from core import metrics
 from core.auth import device_for_key, person_for_token
 from core.database import DbSession, utcnow
 from core.errors import Forbidden, Unauthorized
-from core.models import Device, Section
+from core.models import Section
 from core.settings import get_settings
 from service.clearance.views import QUEUE_STATES
+from service.review.service import stale_devices
 
 router = APIRouter(tags=["operations"])
 PROMETHEUS_TEXT = "text/plain; version=0.0.4; charset=utf-8"
-# Devices that report now and then by nature (marking, bench, on-board), never "stale";
-# the review screen's list of stale devices leaves out the same kinds.
-OCCASIONAL_KINDS = ("marking_station", "test_bench", "onboard_unit")
 
 
 def _authorised(request: Request, session: Session) -> None:
@@ -59,21 +56,16 @@ def _gauge(name: str, help_text: str, samples: dict[str, float], label: str = ""
 
 
 def database_gauges(session: Session) -> list[str]:
-    """Stale devices, sections by state, the review queue: one query each."""
-    limit = utcnow() - timedelta(seconds=get_settings().heartbeat_s)
-    stale = session.scalar(
-        select(func.count())
-        .select_from(Device)
-        .where(Device.decommissioned_at.is_(None), Device.kind.not_in(OCCASIONAL_KINDS))
-        .where(or_(Device.last_seen_at.is_(None), Device.last_seen_at < limit))
-    )
+    """Stale devices (the review screen's list, by the one liveness rule
+    :func:`ingest.liveness.stale_devices`), sections by state, the review queue."""
+    stale = len(stale_devices(session, utcnow()))
     states = {
         state: float(n)
         for state, n in session.execute(select(Section.state, func.count()).group_by(Section.state))
     }
     queue = sum(n for state, n in states.items() if state in QUEUE_STATES)
     return [
-        *_gauge("depot_devices_stale", "devices silent past DEPOT_HEARTBEAT_S", {"": stale or 0}),
+        *_gauge("depot_devices_stale", "devices silent past DEPOT_HEARTBEAT_S", {"": stale}),
         *_gauge("depot_sections", "block sections by state", states, "state"),
         *_gauge("depot_review_queue", "sections waiting for a dispatcher", {"": queue}),
     ]

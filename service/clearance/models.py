@@ -42,6 +42,9 @@ class Run(Base):
     # side's devices are judged silent or not (liveness counts receive times, not device time).
     departure_received_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
     arrival_received_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+    # The train number the arrival reported (``train_arrived.train``): another number than
+    # the departure's is evidence every re-decision keeps (service.train_contradictions).
+    arrival_train: Mapped[str | None] = mapped_column(String(32), nullable=True)
 
 
 class EvidenceColumns:

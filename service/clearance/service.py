@@ -167,14 +167,19 @@ def close_run(
             "run": run.id,
             "warning": f"arrival reported at {station}, but run {run.id} goes to {run.to_station}",
         }
-    run.arrived_at, run.arrival_received_at = at, received
+    run.arrived_at, run.arrival_received_at, run.arrival_train = at, received, train
     run.status = "arrived"
-    notes = (
-        []
-        if train == run.train
-        else [f"arrival reported train {train}, departure train {run.train}"]
-    )
-    return evaluate(session, run, section, notes=notes)
+    return evaluate(session, run, section)
+
+
+def train_contradictions(run: Run) -> list[str]:
+    """The arrival reported another train number than the departure: which train is in the
+    section is in doubt, so the run is never ``complete`` without a person. Derived from the
+    run (the arrival's number is stored) so that every re-decision — late evidence, replay —
+    keeps it, as the dispatcher must keep seeing it."""
+    if run.arrival_train is None or run.arrival_train == run.train:
+        return []
+    return [f"arrival reported train {run.arrival_train}, departure train {run.train}"]
 
 
 def time_contradictions(run: Run) -> list[str]:
@@ -194,7 +199,7 @@ def evaluate(
 ) -> dict[str, Any]:
     """Decide an arrived run from its evidence; the section follows when the run holds it."""
     previous = run.verdict
-    notes = [*time_contradictions(run), *(notes or [])]
+    notes = [*time_contradictions(run), *train_contradictions(run), *(notes or [])]
     gathered = gather(session, run, section)
     decision = decide(gathered.evidence)
     verdict, reasons = decision.verdict, [*decision.reasons, *(notes or [])]

@@ -9,7 +9,7 @@ from sqlalchemy.orm import Session
 from core.models import Car
 from ingest.handlers import Derivation
 from service.fleet.rules import refuse_implausible, registered, value_problems
-from service.fleet.service import is_repeated_test, record_measurements
+from service.fleet.service import is_repeated_test, store_test
 
 
 def measurement_values(session: Session, event: Any) -> None:
@@ -35,9 +35,7 @@ def measurement(d: Derivation) -> dict[str, Any]:
         # Only on replay of an event stored before the values were checked at the door (or
         # before a parameter's range was narrowed): the raw event is kept, nothing derived.
         return {"car": car_id, "measurements": 0, "refused": refused}
-    if is_repeated_test(d.session, car_id, d.event.occurred_at, d.event.values):
-        return {"car": car_id, "measurements": 0, "note": "this test is already stored"}
-    stored = record_measurements(
+    stored = store_test(
         d.session,
         car_id,
         d.event.occurred_at,
@@ -45,4 +43,6 @@ def measurement(d: Derivation) -> dict[str, Any]:
         source="event",
         raw_event_id=d.raw.id,
     )
+    if not stored:
+        return {"car": car_id, "measurements": 0, "note": "this test is already stored"}
     return {"car": car_id, "measurements": stored}

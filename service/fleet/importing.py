@@ -3,41 +3,50 @@
 Two layouts are accepted: *wide*, ``car,taken_at,<parameter>,<parameter>,…`` (one test per
 row, an empty cell is a parameter not measured), and *long*, ``car,taken_at,parameter,value``.
 Every parameter must be registered and every value plausible (`service.fleet.rules`, the same
-rule as the API and ``measurement`` events); a row with more or fewer fields than the header
-(a decimal comma, a lost separator) is refused. Importing the same file again stores nothing
-twice: a test already stored with the same values is skipped.
+rule as the API and ``measurement`` events); a value is written in ASCII decimal digits (``3.1``,
+``-0.25``, ``2.4e-3``: never ``3.1_0`` or ``٣.١``, which Python's ``float`` would read); no test
+is dated further ahead than the events' allowed clock skew (``DEPOT_MAX_CLOCK_SKEW_S``); a row
+with more or fewer fields than the header (a decimal comma, a lost separator) is refused.
+Importing the same file again stores nothing twice: a test already stored with the same values
+is skipped.
 """
 
 from __future__ import annotations
 
 import csv
 import math
+import re
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from datetime import datetime
 from typing import TextIO
 
-from sqlalchemy import insert, select
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from core.database import utcnow
 from core.errors import Unprocessable
 from core.models import Car
 from ingest.schemas import EARLIEST, LATEST
 from service.fleet.csv_checks import decimal_comma_problems
 from service.fleet.models import Measurement, Parameter
-from service.fleet.rules import value_problems
-from service.fleet.service import measured_values, measurement_row
+from service.fleet.rules import ahead_problem, value_problems
+from service.fleet.service import insert_ignoring_repeats, measured_values, measurement_row
 
 KEYS = ("car", "taken_at")
 LONG = ("parameter", "value")
 EXAMPLE = "car,taken_at,brake_cylinder_fill_s,door_close_s"
 _SHOWN = 5  # errors listed before "… and N more"
 _INSERT_CHUNK = 1000
+# A number as a CSV of measurements writes it: ASCII digits, an optional sign, point and
+# exponent. ``float`` also reads ``3.1_0``, Arabic-Indic or full-width digits; those are refused.
+_DECIMAL = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+_BLANKS = " \t"
 
 Test = tuple[str, datetime, dict[str, float]]
 
 
-def _when(text: str, line: int, errors: list[str]) -> datetime | None:
+def _when(text: str, line: int, errors: list[str], now: datetime) -> datetime | None:
     try:
         at = datetime.fromisoformat(text.strip())
     except ValueError:
@@ -49,16 +58,21 @@ def _when(text: str, line: int, errors: list[str]) -> datetime | None:
     if not EARLIEST <= at < LATEST:
         errors.append(f"line {line}: taken_at {text!r} is not between 2000 and 2100")
         return None
+    ahead = ahead_problem(at, now)
+    if ahead:
+        errors.append(f"line {line}: {ahead}")
+        return None
     return at
 
 
 def _number(text: str, line: int, column: str, errors: list[str]) -> float | None:
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
+    written = text.strip(_BLANKS)
+    value = float(written) if _DECIMAL.fullmatch(written) else math.nan
     if not math.isfinite(value):
-        errors.append(f"line {line}, column {column}: {text!r} is not a finite number")
+        errors.append(
+            f"line {line}, column {column}: {text!r} is not a finite number in ASCII decimal"
+            " digits; write it like 3.1, -0.25 or 2.4e-3"
+        )
         return None
     return value
 
@@ -124,9 +138,13 @@ class _Parsed:
             test.setdefault(name, (value, line))
 
 
-def parse_tests(stream: TextIO, parameters: Mapping[str, Parameter]) -> list[Test]:
-    """The tests in a CSV file, checked against the registered ``parameters``; raises
-    Unprocessable listing the bad lines and columns (nothing is imported then)."""
+def parse_tests(
+    stream: TextIO, parameters: Mapping[str, Parameter], now: datetime | None = None
+) -> list[Test]:
+    """The tests in a CSV file, checked against the registered ``parameters`` and the server
+    time ``now`` (default: the clock); raises Unprocessable listing the bad lines and columns
+    (nothing is imported then)."""
+    now = utcnow() if now is None else now
     reader = csv.reader(stream)
     header = _header(reader)
     rows = [(line, fields) for line, fields in enumerate(reader, start=2) if fields]
@@ -139,7 +157,8 @@ def parse_tests(stream: TextIO, parameters: Mapping[str, Parameter]) -> list[Tes
         if shape:
             parsed.errors.append(shape)
             continue
-        _parse_row(dict(zip(header, fields, strict=True)), line, long, params, parameters, parsed)
+        row = dict(zip(header, fields, strict=True))
+        _parse_row(row, line, long, params, parameters, parsed, now)
     _raise(parsed.errors, "fix these lines and import the file again (nothing was imported)")
     if not parsed.tests:
         raise Unprocessable("the CSV holds no measurements; add rows under the header")
@@ -156,9 +175,10 @@ def _parse_row(
     params: list[str],
     parameters: Mapping[str, Parameter],
     parsed: _Parsed,
+    now: datetime,
 ) -> None:
     errors = parsed.errors
-    car, at = (row.get("car") or "").strip(), _when(row.get("taken_at") or "", line, errors)
+    car, at = (row.get("car") or "").strip(), _when(row.get("taken_at") or "", line, errors, now)
     if not car:
         errors.append(f"line {line}: the car is empty")
     if long:
@@ -224,7 +244,16 @@ def import_tests(session: Session, tests: Iterable[Test]) -> tuple[int, int]:
     _raise(conflicts, "correct the file or the stored tests (nothing was imported)")
     layouts: dict[str, int] = {}
     rows = [measurement_row(session, c, at, v, source="csv", known=layouts) for c, at, v in tests]
+    statement = insert_ignoring_repeats(session).returning(Measurement.car_id, Measurement.taken_at)
+    written: set[tuple[str, datetime]] = set()
     for start in range(0, len(rows), _INSERT_CHUNK):
-        session.connection().execute(insert(Measurement), rows[start : start + _INSERT_CHUNK])
+        chunk = rows[start : start + _INSERT_CHUNK]
+        written.update((car, at) for car, at in session.connection().execute(statement, chunk))
+    if len(written) < len(rows):
+        # A concurrent import stored some of these tests after the check: the same values
+        # are skipped, other values refuse the whole file as any conflict does.
+        _raise(_already_stored(session, tests)[1], "correct the file or the stored tests"
+               " (nothing was imported)")  # fmt: skip
     session.flush()
-    return len(tests), sum(len(v) for _, _, v in tests)
+    done = [(car, at, v) for car, at, v in tests if (car, at) in written]
+    return len(done), sum(len(v) for _, _, v in done)

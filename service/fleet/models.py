@@ -41,10 +41,13 @@ class MeasurementLayout(Base):
 
 
 class Measurement(Base):
-    """One test of a car: every value measured at ``taken_at``, in its layout's order."""
+    """One test of a car: every value measured at ``taken_at``, in its layout's order.
+
+    A car has one test at a time (unique, migration 0009): a parameter's value at a time is
+    never stored twice, and a test is never silently rewritten (service.fleet.service)."""
 
     __tablename__ = "measurements"
-    __table_args__ = (Index("ix_measurements_car_id_taken_at", "car_id", "taken_at"),)
+    __table_args__ = (Index("uq_measurements_car_id_taken_at", "car_id", "taken_at", unique=True),)
 
     id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
     car_id: Mapped[str] = mapped_column(ForeignKey("cars.id"))

@@ -22,7 +22,7 @@ from service.fleet.responses import (
     OverrideOut,
     ParameterOut,
 )
-from service.fleet.rules import plausible_range, refuse_implausible, registered
+from service.fleet.rules import plausible_range, refuse_ahead, refuse_implausible, registered
 from service.fleet.schemas import ForecastRunIn, MaintenanceDecisionIn, MeasurementIn, ParameterIn
 
 router = APIRouter(tags=["maintenance"])
@@ -58,11 +58,12 @@ def post_measurements(
     values at the same ``taken_at`` it is refused (409): a test is not silently rewritten."""
     service.require_car(session, car_id)
     refuse_implausible(registered(session), body.values)
+    refuse_ahead(body.taken_at, utcnow())
     answer = {"car": car_id, "taken_at": body.taken_at.isoformat()}
-    if service.is_repeated_test(session, car_id, body.taken_at, body.values):
+    stored = service.store_test(session, car_id, body.taken_at, body.values, source="api")
+    if not stored:
         response.status_code = 200
         return {**answer, "measurements": 0, "status": "duplicate"}
-    stored = service.record_measurements(session, car_id, body.taken_at, body.values, source="api")
     return {**answer, "measurements": stored, "status": "created"}
 
 

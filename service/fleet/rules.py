@@ -11,11 +11,14 @@ from __future__ import annotations
 import difflib
 from collections.abc import Mapping
 from dataclasses import dataclass
+from datetime import datetime, timedelta
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from core.errors import Unprocessable
+from core.schemas import format_instant
+from core.settings import get_settings
 from service.fleet.models import Parameter
 
 
@@ -82,3 +85,25 @@ def refuse_implausible(parameters: Mapping[str, Parameter], values: Mapping[str,
     if problems:
         errors = [{"loc": ["body", "values", k], "msg": v} for k, v in problems.items()]
         raise Unprocessable("; ".join(problems.values()), errors=errors)
+
+
+def ahead_problem(taken_at: datetime, now: datetime) -> str | None:
+    """Why a test dated ``taken_at`` is refused at server time ``now``, or None: the same
+    allowed clock skew as device events (``DEPOT_MAX_CLOCK_SKEW_S``, ``ingest.checks``), since
+    a test dated ahead would be the car's "latest" state for years and move its forecast."""
+    skew = get_settings().max_clock_skew_s
+    if taken_at <= now + timedelta(seconds=skew):
+        return None
+    ahead = (taken_at - now).total_seconds()
+    return (
+        f"taken_at {format_instant(taken_at)} is {ahead:.0f} s ahead of the server's clock"
+        f" ({format_instant(now.replace(microsecond=0))}); at most {skew:g} s is allowed"
+        " (DEPOT_MAX_CLOCK_SKEW_S): give the time the test was taken"
+    )
+
+
+def refuse_ahead(taken_at: datetime, now: datetime) -> None:
+    """Raise 422 for a test dated further ahead than the allowed clock skew."""
+    problem = ahead_problem(taken_at, now)
+    if problem:
+        raise Unprocessable(problem, errors=[{"loc": ["body", "taken_at"], "msg": problem}])

@@ -11,7 +11,7 @@ from collections.abc import Mapping, Sequence
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import insert, select
+from sqlalchemy import select
 from sqlalchemy.dialects.postgresql import insert as pg_insert
 from sqlalchemy.dialects.sqlite import insert as sqlite_insert
 from sqlalchemy.orm import Session
@@ -87,6 +87,15 @@ def measurement_row(
     }
 
 
+def insert_ignoring_repeats(session: Session) -> Any:
+    """``INSERT … ON CONFLICT (car_id, taken_at) DO NOTHING`` into measurements: the unique
+    index (migration 0009) holds one test per car and time, also against a concurrent writer
+    that stored it after this transaction looked (PostgreSQL waits for that writer's commit)."""
+    dialect = session.get_bind().dialect.name
+    make = pg_insert if dialect == "postgresql" else sqlite_insert
+    return make(Measurement).on_conflict_do_nothing(index_elements=["car_id", "taken_at"])
+
+
 def record_measurements(
     session: Session,
     car_id: str,
@@ -96,13 +105,38 @@ def record_measurements(
     source: str,
     raw_event_id: int | None = None,
 ) -> int:
-    """Store one test of a car (one row); returns the number of values."""
+    """Store one test of a car (one row); returns the number of values stored: 0 when the car
+    already has a test at ``taken_at`` (another transaction stored it after the caller's
+    check — :func:`store_test` answers that case by the repeat rule)."""
     row = measurement_row(
         session, car_id, taken_at, values, source=source, raw_event_id=raw_event_id
     )
     # Core insert (the ORM unit of work costs more than the row itself here).
-    session.connection().execute(insert(Measurement), [row])
-    return len(values)
+    statement = insert_ignoring_repeats(session).returning(Measurement.id)
+    written = session.connection().execute(statement, row).first()
+    return len(values) if written is not None else 0
+
+
+def store_test(
+    session: Session,
+    car_id: str,
+    taken_at: datetime,
+    values: dict[str, float],
+    *,
+    source: str,
+    raw_event_id: int | None = None,
+) -> int:
+    """Store a test unless the car has it already: the number of values stored, 0 for the
+    very same test again (idempotent); 409 when a test at ``taken_at`` has other values — also
+    when a concurrent request stored it between the check and the insert."""
+    if is_repeated_test(session, car_id, taken_at, values):
+        return 0
+    stored = record_measurements(
+        session, car_id, taken_at, values, source=source, raw_event_id=raw_event_id
+    )
+    if not stored:
+        is_repeated_test(session, car_id, taken_at, values)  # the row now seen: 409 or repeat
+    return stored
 
 
 def measured_values(session: Session, test: Measurement) -> dict[str, float]:

@@ -15,6 +15,7 @@ from core.auth import Principal, person_for_token
 from core.database import DbSession, utcnow
 from core.errors import DepotError
 from core.settings import get_settings
+from core.timefmt import clock_time, date_time
 from service.clearance import service as clearance
 from service.clearance.router import (
     MAX_ROW_ID,
@@ -36,7 +37,6 @@ from service.review.service import (
     build_screen,
     last_decision,
 )
-from service.review.timefmt import clock, when, zone_name
 
 COOKIE = "depot_review"
 HERE = Path(__file__).parent
@@ -44,7 +44,7 @@ STATIC = {"review.js": "text/javascript", "alert.wav": "audio/wav"}
 FRAGMENTS = ("sections", "queue", "stale", "recent", "run", "actions")
 templates = Jinja2Templates(directory=str(HERE / "templates"))
 templates.env.globals.update(state_words=STATE_WORDS, action_labels=ACTION_LABELS)
-templates.env.filters.update(when=when, clock=clock)
+templates.env.filters.update(date_time=date_time)
 router = APIRouter(tags=["review screen"], include_in_schema=False)
 
 
@@ -98,8 +98,7 @@ def _context(screen: Screen, who: Principal) -> dict[str, Any]:
         "consists": aligned_rows(screen.run) if screen.run else [],
         "refresh_s": get_settings().review_refresh_s,
         "heartbeat_s": get_settings().heartbeat_s,
-        "updated": clock(now),
-        "zone": zone_name(now),
+        "updated": clock_time(now),
     }
 
 
@@ -125,8 +124,7 @@ def review(
 class LiveScreen(BaseModel):
     """One update of the page: its fragments' HTML, the alerts, the title, when it was built."""
 
-    updated: str  # HH:MM:SS in the dispatcher's zone
-    zone: str
+    updated: str  # HH:MM:SS ZONE in the dispatcher's zone (core.timefmt.clock_time)
     run: int | None
     title: str
     alerts: list[dict[str, Any]]
@@ -148,7 +146,6 @@ def live(
     module = templates.env.get_template("fragments.html").make_module(context)
     return LiveScreen(
         updated=context["updated"],
-        zone=context["zone"],
         run=screen.run["id"] if screen.run else None,
         title=screen.title,
         alerts=screen.alerts,
@@ -178,7 +175,7 @@ def _refusal(session: DbSession, run_id: int, action: str) -> str | None:
     if done and done["action"] == action and held and held["state"] == ACTION_STATES[action]:
         return (
             f"Run {run_id} is already {done['words']} (by {done['actor']} at"
-            f" {when(done['recorded_at'])}); nothing was recorded."
+            f" {date_time(done['recorded_at'])}); nothing was recorded."
         )
     return None
 

@@ -11,12 +11,12 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from core.models import Section
+from core.timefmt import elapsed
 from ingest import liveness
 from service.clearance.models import Run
 from service.clearance.rules import SWEEP_FROM
 from service.clearance.service import ACTION_STATES
 from service.clearance.views import QUEUE_STATES, run_out, section_out
-from service.review.timefmt import duration
 
 STATE_WORDS = {
     "free": "free",
@@ -40,13 +40,23 @@ ACTION_LABELS = {
     "keep_blocked": "Keep blocked",
     "sweep": "Clear after a sweep train",
 }
-ALERT_STATES = ("alarm", "review")  # states that sound and notify when they appear
+ALERT_STATES = ("alarm", "review")
+# The queue's order: most urgent first (then oldest first within a state).
+QUEUE_SEVERITY = (
+    "alarm",
+    "review",
+    "awaiting_confirmation",
+    "blocked",
+)  # states that sound and notify when they appear
 CONSIST_WORDS = {
     "identical": "same cars, same order",
     "missing": "cars missing",
     "unknown": "cannot tell (cars not all identified)",
 }
 DECIDERS = ("dispatcher", "admin")
+# Devices that report now and then by nature (marking, bench, on-board): never listed as stale
+# (nor counted by ``/metrics``, which counts this list).
+OCCASIONAL_KINDS = ("marking_station", "test_bench", "onboard_unit")
 # Clearing from these states overrides evidence of a loss: the page asks once more.
 CONFIRM_CLEAR = {"alarm": "in ALARM", "awaiting_sweep": "waiting for its sweep train"}
 
@@ -76,7 +86,7 @@ def stale_devices(session: Session, now: datetime) -> list[dict[str, Any]]:
             "last_seen_at": device.last_seen_at,
         }
         for device in liveness.stale_devices(session, now)
-        if device.kind not in ("marking_station", "test_bench", "onboard_unit")
+        if device.kind not in OCCASIONAL_KINDS
     ]
 
 
@@ -110,7 +120,15 @@ def _since(section: dict[str, Any], now: datetime) -> str:
     since = section["state_since"]
     if not since:
         return words
-    return f"{words} for {duration((now - datetime.fromisoformat(since)).total_seconds())}"
+    return f"{words} for {elapsed(since, now)}"
+
+
+def queue_order(queue: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The queue as a dispatcher works it: alarms first, then runs that need review, then the
+    rest (awaiting confirmation, blocked), each oldest first — a new alarm is never below an
+    older review."""
+    rank = {state: i for i, state in enumerate(QUEUE_SEVERITY)}
+    return sorted(queue, key=lambda s: (rank.get(s["state"], len(rank)), s["state_since"] or ""))
 
 
 def _title(queue: list[dict[str, Any]]) -> str:
@@ -126,8 +144,9 @@ def build_screen(
     sections = [
         section_out(session, s) for s in session.scalars(select(Section).order_by(Section.id))
     ]
-    queue = [s for s in sections if s["state"] in QUEUE_STATES and s["run"] is not None]
-    queue.sort(key=lambda s: s["state_since"] or "")
+    queue = queue_order(
+        [s for s in sections if s["state"] in QUEUE_STATES and s["run"] is not None]
+    )
     for s in queue:
         s["since_words"] = _since(s, now)
     recent_runs = session.scalars(select(Run).order_by(Run.id.desc()).limit(15)).all()

@@ -95,6 +95,13 @@ def test_import_long_csv(db, session: Session, tmp_path: Path, capsys) -> None:
             WIDE.replace("0118,2026-11-01T08:00:00Z,2.38,3.97", "0118,2026-11-01T08:00:00Z,2.38"),
             "line 4: fewer fields than the 4 columns",
         ),
+        # numbers only Python's float reads, and a test dated years ahead (data rules)
+        (WIDE.replace("2.38", "2.3_8"), "line 4, column door_close_s: '2.3_8' is not a finite"),
+        (WIDE.replace("4.02", "٤.٠٢"), "line 2, column brake_release_s: '٤.٠٢' is not a finite"),
+        (
+            WIDE.replace("2026-11-03T07:30:00+00:00", "2096-11-03T07:30:00+00:00"),
+            "line 3: taken_at 2096-11-03T07:30:00Z is",
+        ),
         (
             WIDE.replace("2.45", "3e9"),
             "line 3, column door_close_s: door_close_s = 3e+09 s is"

@@ -7,6 +7,7 @@ import re
 
 import pytest
 from fastapi.testclient import TestClient
+from sqlalchemy.orm import Session
 
 from core import metrics
 from core.database import utcnow
@@ -99,3 +100,25 @@ def test_hostile_kinds_cannot_grow_the_answer() -> None:
     assert len(counter.render()) == 2 + metrics.MAX_SERIES + 1  # help, type, series, "other"
     assert counter.value("other") == 50
     assert metrics._kind_of({"kind": 'x"}\n'}) == "unknown"
+
+
+def test_stale_devices_gauge_follows_the_one_liveness_rule(
+    client: TestClient, session: Session, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``depot_devices_stale`` counts what ``ingest.liveness`` calls stale and the review
+    screen lists, not a query of its own: change the rule in one place and both follow."""
+    from datetime import datetime
+
+    from ingest import liveness
+    from service.review.service import stale_devices
+
+    build_line(client)
+    shown = len(stale_devices(session, utcnow()))
+    assert _scrape(client)["depot_devices_stale"] == shown > 0
+
+    def nobody_is_silent(last_received: datetime | None, now: datetime) -> bool:
+        return False
+
+    monkeypatch.setattr(liveness, "silent", nobody_is_silent)
+    assert stale_devices(session, utcnow()) == []
+    assert _scrape(client)["depot_devices_stale"] == 0

@@ -182,7 +182,7 @@ def test_live_fragments_follow_the_line_and_say_when(
 ) -> None:
     login(client, session)
     first = client.get("/review/live").json()
-    assert re.fullmatch(r"\d\d:\d\d:\d\d", first["updated"]), first["updated"]
+    assert re.fullmatch(r"\d\d:\d\d:\d\d [A-Z+\d-]+", first["updated"]), first["updated"]
     assert 'data-state="free"' in first["fragments"]["sections"]
     assert first["alerts"] == [] and not first["title"].startswith("ALARM")
     run = alarm_run(line)
@@ -253,3 +253,35 @@ def test_fleet_page_shows_no_text_from_the_url_either(client: TestClient, sessio
     login(client, session)
     page = client.get("/review/fleet", params={"notice": "Car 0117 withdrawn by the system"}).text
     assert "withdrawn by the system" not in page
+
+
+def test_the_queue_says_days_as_d_and_h_in_the_one_time_format(
+    line: Line, session: Session
+) -> None:
+    """The screens use core.timefmt: an alarm three days old reads "3 d 4 h", as in the docs."""
+    from datetime import timedelta
+
+    from service.review.service import build_screen
+    from tests.service.reviewkit import TRANSIT
+
+    alarm_run(line)
+    now = T0 + TRANSIT + timedelta(days=3, hours=4, minutes=20)
+    screen = build_screen(session, run_id=None, now=now)
+    assert [s["since_words"] for s in screen.queue] == ["in alarm for 3 d 4 h"]
+
+
+def test_a_new_alarm_comes_first_in_the_queue_above_older_reviews() -> None:
+    """The queue was oldest first, which put a new alarm under older reviews: alarms come
+    first, then runs that need review, then the rest, each oldest first (and the screen opens
+    on the first)."""
+    from service.review.service import queue_order
+
+    queue = [
+        {"id": "XY", "state": "review", "state_since": "2026-11-23T09:00:00Z"},
+        {"id": "AB", "state": "alarm", "state_since": "2026-11-23T11:00:00Z"},
+        {"id": "CD", "state": "blocked", "state_since": "2026-11-23T08:00:00Z"},
+        {"id": "BC", "state": "review", "state_since": "2026-11-23T10:00:00Z"},
+        {"id": "EF", "state": "awaiting_confirmation", "state_since": "2026-11-23T07:00:00Z"},
+        {"id": "GH", "state": "alarm", "state_since": None},
+    ]
+    assert [s["id"] for s in queue_order(queue)] == ["GH", "AB", "XY", "BC", "EF", "CD"]

@@ -55,3 +55,24 @@ def test_an_unknown_zone_is_refused_with_the_fix(monkeypatch: pytest.MonkeyPatch
     monkeypatch.setenv("DEPOT_TIME_ZONE", "Europe/Atlantis")
     with pytest.raises(ValidationError, match="IANA time zone"):
         Settings()
+
+
+def test_one_set_of_conventions_for_every_screen(zone: object) -> None:
+    """The review screens use these functions too: the API's ISO text is read, days are
+    ``3 d 4 h``, nothing known is a dash (never an empty text), a naive text is refused."""
+    zone("Europe/Kyiv")  # type: ignore[operator]
+    assert timefmt.date_time("2026-11-23T17:54:11.250Z") == "2026-11-23 19:54:11 EET"
+    assert timefmt.clock_time("2026-11-23T17:54:11Z") == "19:54:11 EET"
+    assert timefmt.date_time("") == "—"
+    since = datetime(2026, 11, 20, 13, 30, tzinfo=UTC)
+    assert timefmt.elapsed(since, EVENING) == "3 d 4 h"
+    assert timefmt.elapsed("2026-11-22T17:54:11Z", EVENING) == "1 d 0 h"
+    assert timefmt.elapsed(since, datetime(2026, 11, 21, 13, 29, tzinfo=UTC)) == "23 h 59 min"
+    with pytest.raises(ValueError, match="offset"):
+        timefmt.date_time("2026-11-23T17:54:11")
+
+
+def test_the_review_screens_have_no_formatter_of_their_own() -> None:
+    import importlib.util
+
+    assert importlib.util.find_spec("service.review.timefmt") is None

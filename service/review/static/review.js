@@ -97,8 +97,8 @@
       if (form) { form.action = "/review/runs/" + data.run + "/decision"; }
     }
     document.title = data.title;
-    updated.textContent = "updated " + data.updated + " " + data.zone;
-    staleSince.textContent = data.updated + " " + data.zone;
+    updated.textContent = "updated " + data.updated;
+    staleSince.textContent = data.updated;
     alerts(data.alerts);
   }
 
