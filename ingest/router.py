@@ -30,7 +30,7 @@ from ingest.device_auth import EventDevice
 from ingest.handlers import prepare
 from ingest.payload import read_json
 from ingest.schemas import BatchResult, EventAck
-from ingest.snapshots import check_image, store_image
+from ingest.snapshots import check_form_fields, check_image, store_image
 
 router = APIRouter(tags=["devices"])
 T = TypeVar("T")
@@ -167,6 +167,7 @@ async def post_snapshot(
             f"the upload has {declared} bytes; the image limit is {settings.max_image_bytes}"
         )
     async with request.form(max_files=1, max_fields=10) as form:
+        check_form_fields(form.keys())
         upload = form.get("image")
         if not isinstance(upload, UploadFile):
             raise Unprocessable(

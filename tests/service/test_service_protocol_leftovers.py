@@ -81,13 +81,6 @@ def test_a_snapshot_form_field_the_protocol_does_not_name_is_refused() -> None:
     ]
 
 
-WIRING = (
-    "needs one line in ingest/router.py (owned by the ingest-floor helper): in post_snapshot's"
-    " `async with request.form(...)` block, `check_form_fields(form.keys())` first"
-)
-
-
-@pytest.mark.skip(reason=WIRING)
 def test_the_snapshot_upload_names_an_unknown_form_field(
     client: TestClient, session: Session
 ) -> None:
