@@ -142,8 +142,10 @@ def _finite(values: dict[str, float]) -> dict[str, float]:
 
 
 # A test's readings by parameter name (bench, on-board diagnostics, API, CSV import).
+# A reading is a JSON number (an integer is a number too); "3.1" and true are refused on the
+# engineer API as they are on the device protocol, whose models are strict anyway.
 MeasuredValues = Annotated[
-    dict[Annotated[str, Field(min_length=1, max_length=64)], float],
+    dict[Annotated[str, Field(min_length=1, max_length=64)], Annotated[float, Field(strict=True)]],
     Field(min_length=1, max_length=200),
     AfterValidator(_finite),
 ]

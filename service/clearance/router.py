@@ -29,8 +29,9 @@ from service.clearance.responses import (
 from service.clearance.schemas import DecisionIn
 from service.clearance.tail import camera_profile, snapshot_file
 from service.clearance.views import audit_out, run_out, section_out
+from service.strict_json import StrictJSONRoute
 
-router = APIRouter(tags=["dispatcher"])
+router = APIRouter(tags=["dispatcher"], route_class=StrictJSONRoute)
 MAX_ROW_ID = 2**63 - 1
 RunId = Annotated[int, Path(ge=1, le=MAX_ROW_ID, description="run id")]
 SnapshotId = Annotated[int, Path(ge=1, le=MAX_ROW_ID, description="snapshot id")]

@@ -24,8 +24,9 @@ from service.fleet.responses import (
 )
 from service.fleet.rules import plausible_range, refuse_ahead, refuse_implausible, registered
 from service.fleet.schemas import ForecastRunIn, MaintenanceDecisionIn, MeasurementIn, ParameterIn
+from service.strict_json import StrictJSONRoute
 
-router = APIRouter(tags=["maintenance"])
+router = APIRouter(tags=["maintenance"], route_class=StrictJSONRoute)
 PNG: dict[int | str, dict[str, Any]] = {
     200: {"content": {"image/png": {}}, "description": "the chart"}
 }

@@ -18,8 +18,9 @@ from service.setup.schemas import (
     UserOut,
     UserToken,
 )
+from service.strict_json import StrictJSONRoute
 
-router = APIRouter(tags=["credentials"])
+router = APIRouter(tags=["credentials"], route_class=StrictJSONRoute)
 
 
 def _token_out(user: Any, token: str) -> UserToken:

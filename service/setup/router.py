@@ -22,8 +22,9 @@ from service.setup.schemas import (
     StationIn,
     StationOut,
 )
+from service.strict_json import StrictJSONRoute
 
-router = APIRouter(tags=["setup"])
+router = APIRouter(tags=["setup"], route_class=StrictJSONRoute)
 
 
 @router.post("/stations", status_code=201, response_model=StationOut)

@@ -9,12 +9,13 @@ from sqlalchemy import select
 
 from core.auth import Admin, CurrentReader
 from core.database import DbSession
+from service.strict_json import StrictJSONRoute
 from service.trains import service
 from service.trains.models import TrackMarker
 from service.trains.responses import TrainPositionOut
 from service.trains.schemas import MarkerIn, MarkerOut
 
-router = APIRouter(tags=["motion"])
+router = APIRouter(tags=["motion"], route_class=StrictJSONRoute)
 
 
 @router.post("/markers", status_code=201, response_model=MarkerOut)

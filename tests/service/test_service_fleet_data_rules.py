@@ -294,3 +294,43 @@ def test_migration_stops_on_contradicting_tests_and_names_them(url: str) -> None
             "0008_received_liveness"
         )
     engine.dispose()
+
+
+# -- the engineer API reads JSON as strictly as the device protocol -------------------------
+
+
+def test_api_test_repeating_a_parameter_is_refused(
+    keys: dict, client: TestClient, session: Session, engineer: dict
+) -> None:
+    # json.loads keeps the last of two equal keys: 2.9 was stored and 2.5 silently dropped.
+    body = (
+        '{"taken_at": "2026-10-03T08:00:00Z", "values": {"door_close_s": 2.5, "door_close_s": 2.9}}'
+    )
+    answer = client.post(
+        "/api/v1/cars/0117/measurements",
+        content=body,
+        headers={**engineer, "Content-Type": "application/json"},
+    )
+    assert answer.status_code == 422, answer.text
+    assert answer.headers["content-type"] == "application/problem+json"
+    assert "repeats the key 'door_close_s'" in answer.json()["detail"]
+    assert _count(session) == 0
+
+
+@pytest.mark.parametrize("value", ["3.1", True, None, [3.1]])
+def test_api_test_value_that_is_not_a_json_number_is_refused(
+    keys: dict, client: TestClient, session: Session, engineer: dict, value: Any
+) -> None:
+    body = {"taken_at": "2026-10-03T08:00:00Z", "values": {"door_close_s": value}}
+    answer = client.post("/api/v1/cars/0117/measurements", json=body, headers=engineer)
+    assert answer.status_code == 422, answer.text
+    assert answer.json()["errors"][0]["loc"][:3] == ["body", "values", "door_close_s"]
+    assert _count(session) == 0
+
+
+def test_api_test_integer_values_stay_accepted(
+    keys: dict, client: TestClient, session: Session, engineer: dict
+) -> None:
+    body = {"taken_at": "2026-10-03T08:00:00Z", "values": {"door_close_s": 3}}
+    answer = client.post("/api/v1/cars/0117/measurements", json=body, headers=engineer)
+    assert answer.status_code == 201, answer.text
