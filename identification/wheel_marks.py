@@ -171,9 +171,7 @@ def _duplicate(
     readable axles agreeing (one axle is never checked by another)."""
     n, b = v.shape
     if n < need_agree:
-        return _no_code(
-            f"{n} axle(s) read; {need_agree} agreeing axles needed for a code", **info
-        )
+        return _no_code(f"{n} axle(s) read; {need_agree} agreeing axles needed for a code", **info)
     n1 = np.count_nonzero(v >= theta, axis=0)
     n0 = np.count_nonzero(v <= -theta, axis=0)
     need = (n + 1) // 2

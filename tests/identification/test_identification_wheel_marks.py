@@ -10,7 +10,6 @@ import pytest
 
 from identification._crc import crc8
 from identification.simulate import wheel_mark_passage
-from identification.wheel_marks import decode_passage as decode
 from identification.wheel_marks import (
     A0_WEIGHTS,
     WheelDecode,
@@ -18,6 +17,7 @@ from identification.wheel_marks import (
     frozen_zero,
     smooth_baseline,
 )
+from identification.wheel_marks import decode_passage as decode
 
 # protocol.md, example wheel_marks event
 EXAMPLE_BASELINE = [2051, 2049, 2050, 2052, 2048, 2050]
@@ -156,7 +156,10 @@ def test_faint_marks_below_noise_floor_are_erasures() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "reason"),
     [
-        ({"axles": [[2170, 1930], [2170]], "bits_per_axle": 2}, "axle 2 has 1 mark zones, 2 expected"),
+        (
+            {"axles": [[2170, 1930], [2170]], "bits_per_axle": 2},
+            "axle 2 has 1 mark zones, 2 expected",
+        ),
         ({"axles": [[2170, 1930]] * 3, "axles_expected": 4}, "3 axles read, 4 expected"),
         ({"axles": [[2170, 1930]] * 4}, "axle 1 has 2 mark zones, 8 expected"),
         ({"axles": [[2170, 1930]] * 4, "bits_per_axle": 3}, "axle 1 has 2 mark zones, 3 expected"),
