@@ -273,6 +273,21 @@ def decode_audio(
     return packets
 
 
+def _why(path: str | Path, exc: Exception) -> str:
+    """Why a WAV file could not be read, in words (``wave`` often raises with no message)."""
+    if isinstance(exc, FileNotFoundError):
+        return "no such file"
+    if isinstance(exc, IsADirectoryError):
+        return "it is a directory"
+    if isinstance(exc, OSError):
+        return exc.strerror or type(exc).__name__
+    if Path(path).is_file() and Path(path).stat().st_size == 0:
+        return "the file is empty"
+    if isinstance(exc, EOFError) or not str(exc):
+        return "the file ends inside its WAV header: truncated"
+    return str(exc)
+
+
 def read_wav(path: str | Path) -> tuple[FloatArray, int]:
     """Samples (float, channels averaged, centred at zero) and sample rate of a PCM WAV file.
 
@@ -286,7 +301,7 @@ def read_wav(path: str | Path) -> tuple[FloatArray, int]:
             width, channels, rate = wav.getsampwidth(), wav.getnchannels(), wav.getframerate()
             raw = wav.readframes(wav.getnframes())
     except (wave.Error, EOFError, OSError) as exc:
-        raise ValueError(f"{path}: not a readable PCM WAV file ({exc})") from None
+        raise ValueError(f"{path}: not a readable PCM WAV file ({_why(path, exc)})") from None
     if width == 1:
         data = np.frombuffer(raw, dtype=np.uint8).astype(np.float64) - 128.0
     elif width == 3:

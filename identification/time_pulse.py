@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
-from identification.consist import majority_number
+from identification.rules import RULES, IdentificationRules, agreed_number
 
 __all__ = [
     "Detection",
@@ -167,8 +167,8 @@ def decode_passage(
     reflection_window_us: float,
     query_times_us: Sequence[float] | None = None,
     reply_tolerance_us: float | None = None,
-    min_agreeing_reads: int = 2,
     min_read_fraction: float = 0.1,
+    rules: IdentificationRules = RULES,
 ) -> TimePulseDecode:
     """Decode one ``ir_pulses`` passage.
 
@@ -180,7 +180,9 @@ def decode_passage(
     3. several pulses in one cycle merge into one reply;
     4. start/stop pairing with resynchronisation (:func:`pair_reads`) gives the reads;
     5. the car number is the strict majority of the reads, read at least
-       ``min_agreeing_reads`` times (repeated reading); otherwise None.
+       ``rules.min_agreeing_reads`` times (repeated reading; the same rule as ``ir_id``,
+       :func:`identification.rules.agreed_number`) and more often on a long passage
+       (``min_read_fraction``); otherwise None.
 
     Parameters
     ----------
@@ -194,8 +196,11 @@ def decode_passage(
         Query times, µs; default: queries at 0, T, 2T, …
     reply_tolerance_us : float, optional
         Half-width of the reply-time gate; default 5 % of the listening window T − T_refl.
-    min_agreeing_reads : int
-        Reads the majority value needs.
+    min_read_fraction : float
+        Of the reads a car in the zone for the whole passage gives (span / (N + 1)), the
+        fraction that must agree: a handful of reads over a long passage is noise.
+    rules : IdentificationRules
+        ``min_agreeing_reads``: the agreeing reads any car number needs.
 
     Returns
     -------
@@ -224,16 +229,10 @@ def decode_passage(
     tol = 0.05 * (period - blank) if reply_tolerance_us is None else float(reply_tolerance_us)
     rep = _replies(t, period, blank, query_times_us, tol)
     reads = pair_reads(rep.cycles.tolist())
-    number = majority_number(reads)
-    if number is None:
-        reason = "no reads" if not reads else "no strict majority among the reads"
-    elif reads.count(number) < (
-        need := _reads_needed(rep.cycles, number, min_agreeing_reads, min_read_fraction)
-    ):
-        reason = f"only {reads.count(number)} read(s) of {number}; {need} needed"
-        number = None
-    else:
-        reason = "ok"
+    number, reason = agreed_number(reads, rules=rules)
+    if number is not None:
+        need = _reads_needed(rep.cycles, number, rules.min_agreeing_reads, min_read_fraction)
+        number, reason = agreed_number(reads, needed=need, rules=rules)
     return TimePulseDecode(
         car_number=number,
         reads=reads,

@@ -22,6 +22,7 @@ import numpy.typing as npt
 from identification._crc import crc8, int_to_bytes
 from identification.marking import MarkingResult, simulate_marking
 from identification.reading_section import ReadingSection, WheelReading
+from identification.rules import RULES, IdentificationRules
 
 __all__ = [
     "A0_WEIGHTS",
@@ -115,8 +116,40 @@ def _no_code(reason: str, **kw: Any) -> WheelDecode:
     return WheelDecode(code=None, reason=reason, readable_axles=readable, margin=None, **kw)
 
 
+def _outside_range(values: Sequence[float], lo: int, hi: int) -> int | None:
+    """Index of the first value outside [lo, hi] (NaN included), else None. Pure Python, so an
+    integer too large for a float is reported rather than raising."""
+    for i, x in enumerate(values):
+        if not lo <= x <= hi:
+            return i
+    return None
+
+
+def _adc_problem(
+    baseline: Sequence[float], axles: Sequence[Sequence[float]], rules: IdentificationRules
+) -> str | None:
+    lo, hi = rules.adc_min, rules.adc_max
+    where: str | None = None
+    if (i := _outside_range(baseline, lo, hi)) is not None:
+        where, value = f"baseline sample {i + 1}", baseline[i]
+    for k, zones in enumerate(axles, 1):
+        if where is None and (i := _outside_range(zones, lo, hi)) is not None:
+            where, value = f"axle {k} zone {i + 1}", zones[i]
+    if where is None:
+        return None
+    try:
+        shown = f"{float(value):.6g}"
+    except OverflowError:
+        shown = "(an integer too large for any ADC)"
+    return f"ADC code {shown} at {where} is outside the reader's range {lo}–{hi}"
+
+
 def _payload_problem(
-    baseline: Sequence[float], axles: Sequence[Sequence[float]], b: int, expected: int | None
+    baseline: Sequence[float],
+    axles: Sequence[Sequence[float]],
+    b: int,
+    expected: int | None,
+    rules: IdentificationRules,
 ) -> str | None:
     if not axles:
         return "no axles read"
@@ -127,13 +160,18 @@ def _payload_problem(
             return f"axle {k} has {len(zones)} mark zones, {b} expected"
     if len(baseline) < 5:
         return f"baseline has {len(baseline)} samples, at least 5 needed"
-    return None
+    return _adc_problem(baseline, axles, rules)
 
 
-def _duplicate(v: npt.NDArray[np.float64], theta: float, info: dict[str, Any]) -> WheelDecode:
+def _duplicate(
+    v: npt.NDArray[np.float64], theta: float, need_agree: int, info: dict[str, Any]
+) -> WheelDecode:
     """Every axle carries the whole code: per bit, the strict majority of the axles readable
-    at that bit, of which there must be at least half the axles."""
+    at that bit, of which there must be at least half the axles, and at least ``need_agree``
+    readable axles agreeing (one axle is never checked by another)."""
     n, b = v.shape
+    if n < need_agree:
+        return _no_code(f"{n} axle(s) read; {need_agree} agreeing axles needed for a code", **info)
     n1 = np.count_nonzero(v >= theta, axis=0)
     n0 = np.count_nonzero(v <= -theta, axis=0)
     need = (n + 1) // 2
@@ -141,11 +179,17 @@ def _duplicate(v: npt.NDArray[np.float64], theta: float, info: dict[str, Any]) -
     problems: list[str] = []
     for i in range(b):
         ones, zeros = int(n1[i]), int(n0[i])
-        if ones + zeros < need:
-            problems.append(f"bit {i}: erased on {n - ones - zeros} of {n} axles")
-        elif ones == zeros:
+        if ones == zeros and ones > 0:
             problems.append(f"bit {i}: no majority ({ones} vs {zeros})")
-        bits.append(None if ones + zeros < need or ones == zeros else int(ones > zeros))
+        elif ones + zeros < need or max(ones, zeros) < need_agree:
+            problems.append(
+                f"bit {i}: erased on {n - ones - zeros} of {n} axles,"
+                f" {max(ones, zeros)} agree; {need_agree} agreeing axles needed"
+            )
+        else:
+            bits.append(int(ones > zeros))
+            continue
+        bits.append(None)
     if problems:
         more = "; …" if len(problems) > 3 else ""
         return _no_code("; ".join(problems[:3]) + more, bits=bits, **info)
@@ -188,6 +232,7 @@ def decode_passage(
     noise_floor: float = DEFAULT_NOISE_FLOOR,
     threshold_fraction: float = 0.5,
     axles_expected: int | None = None,
+    rules: IdentificationRules = RULES,
 ) -> WheelDecode:
     """Decode one ``wheel_marks`` passage (spec §2, decoding steps 1–5).
 
@@ -197,7 +242,10 @@ def decode_passage(
        θ = max(``noise_floor``, ``threshold_fraction`` × median |v|) adapting to the car's own
        mark strength;
     3. direction 2 reverses the stream (axles and zones): the word in the car's own order;
-    4. ``duplicate``: each bit is the strict majority of the axles readable there;
+    0. a payload the reader cannot have produced gives no code: zones per axle other than the
+       fleet's B, an ADC code outside ``rules.adc_min…adc_max`` (also NaN, ±inf);
+    4. ``duplicate``: each bit is the strict majority of the axles readable there, with at
+       least ``rules.min_agreeing_axles`` of them agreeing (one axle never names a car);
        ``distribute``: one N·B-bit word = code (N·B − 8 bits) then CRC-8 (0x07, init 0) of
        the code written big-endian in whole bytes.
 
@@ -210,7 +258,8 @@ def decode_passage(
     direction : {1, 2}
         Direction of passage.
     bits_per_axle : int, optional
-        B; default: the number of mark zones per axle in the payload.
+        B; default: the fleet's ``rules.zones_per_axle``. It is never taken from the payload:
+        a truncated read (fewer zones) decoded as a shorter code names another car.
     layout : {"duplicate", "distribute"}
     noise_floor : float
         Smallest θ, in ADC codes.
@@ -218,6 +267,9 @@ def decode_passage(
         θ as a fraction of the car's median mark strength.
     axles_expected : int, optional
         Reject a passage with another number of axles.
+    rules : IdentificationRules
+        The fleet's code length, the reader's ADC range and the agreeing axles a ``duplicate``
+        bit needs (:data:`identification.rules.RULES` by default).
 
     Returns
     -------
@@ -236,8 +288,8 @@ def decode_passage(
         raise ValueError(f"direction must be 1 or 2, got {direction!r}")
     if bits_per_axle is not None and bits_per_axle < 1:
         raise ValueError(f"bits_per_axle must be >= 1, got {bits_per_axle}")
-    b = bits_per_axle if bits_per_axle is not None else len(axles[0]) if axles else 0
-    problem = _payload_problem(baseline, axles, b, axles_expected)
+    b = rules.zones_per_axle if bits_per_axle is None else bits_per_axle
+    problem = _payload_problem(baseline, axles, b, axles_expected, rules)
     if problem is not None:
         return _no_code(problem)
     zero = frozen_zero(baseline, noise_floor=noise_floor)
@@ -249,4 +301,6 @@ def decode_passage(
     clear = (v >= theta) | (v <= -theta)
     readable = int(np.count_nonzero(clear.all(axis=1)))
     info: dict[str, Any] = {"zero": zero, "threshold": theta, "readable_axles": readable}
-    return _duplicate(v, theta, info) if layout == "duplicate" else _distribute(v, theta, info)
+    if layout == "duplicate":
+        return _duplicate(v, theta, rules.min_agreeing_axles, info)
+    return _distribute(v, theta, info)

@@ -9,7 +9,7 @@ from sqlalchemy import select
 
 from core.models import Car
 from identification import manchester, time_pulse, wheel_marks
-from identification.consist import majority_number
+from identification.rules import agreed_number
 from ingest.handlers import Derivation
 from service.clearance import service
 from service.clearance.models import AxleReading, CarPassage, EotReport, WheelMarking
@@ -87,12 +87,13 @@ def _decode_ir_pulses(event: Any) -> tuple[int | None, dict[str, Any]]:
         reflection_window_us=event.reflection_window_us,
         query_times_us=event.query_times_us,
     )
-    return result.car_number, {"reads": list(result.reads)}
+    return result.car_number, {"reads": list(result.reads), "reason": result.reason}
 
 
 def _decode_manchester(event: Any) -> tuple[int | None, dict[str, Any]]:
     result = manchester.decode_passage(event.samples, samples_per_bit=event.samples_per_bit)
-    return result.car_number, {"frames_ok": result.frames_ok, "frames_bad": result.frames_bad}
+    detail = {"frames_ok": result.frames_ok, "frames_bad": result.frames_bad}
+    return result.car_number, {**detail, "reason": result.reason}
 
 
 def _decode_wheel_marks(event: Any) -> tuple[int | None, dict[str, Any]]:
@@ -106,10 +107,12 @@ def _decode_wheel_marks(event: Any) -> tuple[int | None, dict[str, Any]]:
 
 
 def _decode_ir_id(event: Any) -> tuple[int | None, dict[str, Any]]:
-    return majority_number(event.reads), {"reads": len(event.reads)}
+    # The same agreeing-reads rule as ir_pulses (identification.rules): one read names no car.
+    number, reason = agreed_number(event.reads)
+    return number, {"reads": len(event.reads), "reason": reason}
 
 
-# Each reader event decodes to a car number, or None when it cannot be trusted.
+# Each reader event decodes to a car number, or None when it cannot be trusted (and why).
 DECODERS = {
     "ir_id": _decode_ir_id,
     "ir_pulses": _decode_ir_pulses,
@@ -125,7 +128,8 @@ def car_passage(d: Derivation) -> dict[str, Any]:
     row = evidence_row(
         CarPassage, d, kind=d.event.kind, number=number, car_id=car_id, detail=detail
     )
-    return {"car_number": number, "car": car_id, **attach_evidence(d, row)}
+    reason = detail["reason"]
+    return {"car_number": number, "car": car_id, "reason": reason, **attach_evidence(d, row)}
 
 
 def wheel_marks_written(d: Derivation) -> dict[str, Any]:

@@ -227,3 +227,34 @@ def test_cli_names_the_problem_with_a_bad_file(
     bad.write_bytes(b"\x00" * 100)
     assert main(["eot-decode", str(bad)]) == 2
     assert "not a readable PCM WAV" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("content", "problem"),
+    [
+        (b"", "the file is empty"),
+        (b"RIFF", "the file ends inside its WAV header"),
+        (b"RIFF\x24\x00\x00\x00WAVEfmt ", "fmt chunk and/or data chunk missing"),
+    ],
+)
+def test_cli_names_an_empty_or_truncated_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], content: bytes, problem: str
+) -> None:
+    # found by the independent trial: an empty file said "not a readable PCM WAV file ()"
+    path = tmp_path / "cut.wav"
+    path.write_bytes(content)
+    assert main(["eot-decode", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("depot: ") and err.count("\n") == 1
+    assert problem in err and "()" not in err
+    with pytest.raises(ValueError, match=problem):
+        decode_wav(path)
+
+
+def test_cli_names_a_missing_file_or_a_directory(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["eot-decode", str(tmp_path / "missing.wav")]) == 2
+    assert "no such file" in capsys.readouterr().err
+    assert main(["eot-decode", str(tmp_path)]) == 2
+    assert "is a directory" in capsys.readouterr().err

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -11,10 +12,12 @@ from identification._crc import crc8
 from identification.simulate import wheel_mark_passage
 from identification.wheel_marks import (
     A0_WEIGHTS,
+    WheelDecode,
     decode_passage,
     frozen_zero,
     smooth_baseline,
 )
+from identification.wheel_marks import decode_passage as decode
 
 # protocol.md, example wheel_marks event
 EXAMPLE_BASELINE = [2051, 2049, 2050, 2052, 2048, 2050]
@@ -107,26 +110,32 @@ def test_distribute_layout_with_crc() -> None:
     bits = [int(c) for c in f"{word:016b}"]
     axles = [[2050 + (120 if b else -120) for b in bits[4 * k : 4 * k + 4]] for k in range(4)]
     base = [2050] * 5
-    r = decode_passage(base, axles, direction=1, layout="distribute")
+    r = decode_passage(base, axles, direction=1, layout="distribute", bits_per_axle=4)
     assert (r.code, r.reason) == (code, "ok")
     # reversed stream in direction 2
     rev = [list(reversed(a)) for a in reversed(axles)]
-    assert decode_passage(base, rev, direction=2, layout="distribute").code == code
+    assert decode_passage(base, rev, direction=2, layout="distribute", bits_per_axle=4).code == code
     # one flipped mark breaks the CRC: no code, never a wrong one
     bad = [row[:] for row in axles]
     bad[2][1] = 4100 - bad[2][1]
-    r = decode_passage(base, bad, direction=1, layout="distribute")
+    r = decode_passage(base, bad, direction=1, layout="distribute", bits_per_axle=4)
     assert r.code is None and r.reason == "CRC mismatch"
 
 
 def test_distribute_needs_more_than_eight_bits() -> None:
-    r = decode_passage([0] * 5, [[100, -100]] * 4, direction=1, layout="distribute")
+    r = decode_passage(
+        [2050] * 5, [[2150, 1950]] * 4, direction=1, layout="distribute", bits_per_axle=2
+    )
     assert r.code is None and "more than 8 bits" in r.reason
 
 
 def test_duplicate_majority_and_ties() -> None:
     one, zero, weak = 2170, 1930, 2055
     base = [2050] * 5
+
+    def decode_passage(*args: Any, **kwargs: Any) -> WheelDecode:
+        return decode(*args, bits_per_axle=2, **kwargs)
+
     # one axle disagrees on bit 0: the majority of 3 vs 1 wins
     axles = [[one, zero], [one, zero], [one, zero], [zero, zero]]
     assert decode_passage(base, axles, direction=1).code == 0b10
@@ -140,18 +149,22 @@ def test_duplicate_majority_and_ties() -> None:
 
 
 def test_faint_marks_below_noise_floor_are_erasures() -> None:
-    r = decode_passage([2050] * 5, [[2060, 2040]] * 4, direction=1)
+    r = decode_passage([2050] * 5, [[2060, 2040]] * 4, direction=1, bits_per_axle=2)
     assert r.code is None and r.threshold == 30.0
 
 
 @pytest.mark.parametrize(
     ("kwargs", "reason"),
     [
-        ({"axles": [[2170, 1930], [2170]]}, "axle 2 has 1 mark zones, 2 expected"),
+        (
+            {"axles": [[2170, 1930], [2170]], "bits_per_axle": 2},
+            "axle 2 has 1 mark zones, 2 expected",
+        ),
         ({"axles": [[2170, 1930]] * 3, "axles_expected": 4}, "3 axles read, 4 expected"),
+        ({"axles": [[2170, 1930]] * 4}, "axle 1 has 2 mark zones, 8 expected"),
         ({"axles": [[2170, 1930]] * 4, "bits_per_axle": 3}, "axle 1 has 2 mark zones, 3 expected"),
         ({"axles": [], "bits_per_axle": 2}, "no axles read"),
-        ({"baseline": [2050] * 4}, "baseline has 4 samples"),
+        ({"baseline": [2050] * 4, "bits_per_axle": 2}, "baseline has 4 samples"),
     ],
 )
 def test_undecodable_payloads_give_a_reason(kwargs: dict[str, object], reason: str) -> None:
