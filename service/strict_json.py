@@ -10,7 +10,8 @@ same reader.
 
 from __future__ import annotations
 
-from collections.abc import Awaitable, Callable
+from collections.abc import Callable, Coroutine
+from typing import Any
 
 from fastapi import Request, Response
 from fastapi.routing import APIRoute
@@ -28,7 +29,7 @@ def _is_json(request: Request) -> bool:
 class StrictJSONRoute(APIRoute):
     """An API route whose JSON body is refused (422) when it repeats a key or is not UTF-8."""
 
-    def get_route_handler(self) -> Callable[[Request], Awaitable[Response]]:
+    def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
         handler = super().get_route_handler()
 
         async def checked(request: Request) -> Response:
