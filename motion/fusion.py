@@ -132,6 +132,7 @@ class TrackFilter:
         "_state",
         "stale_measurements",
         "unknown_markers",
+        "gnss_rejects",
     )
 
     def __init__(
@@ -148,6 +149,7 @@ class TrackFilter:
         self._state: TrackState | None = None
         self.stale_measurements = 0
         self.unknown_markers = 0
+        self.gnss_rejects = 0  # GNSS speeds rejected in a row by the gate
 
     # -- public API ----------------------------------------------------------
     @property
@@ -191,9 +193,13 @@ class TrackFilter:
         replay = i
         if marker_id is not None:  # a marker read: an exact position at the sample's time
             self._marker_read(i, marker_id)
+        j = None
         if gnss_speed_mps is not None:  # the delayed GNSS speed at its own time
-            replay = self._gnss_speed(t - delay, gnss_speed_mps, replay)
+            j = self._gnss_speed(t - delay, gnss_speed_mps)
+            replay = replay if j is None else min(replay, j)
         self._post = buf.replay(replay)
+        if j is not None:
+            self._gate_watch(j)
         # The delayed GNSS fix: only in a missed marker's zone or with the position unknown.
         if gnss_lat is not None and gnss_lon is not None and self.table.has_geometry:
             self._gnss_fix(t - delay, gnss_lat, gnss_lon)
@@ -230,17 +236,39 @@ class TrackFilter:
         self._buf.add(i, Measurement(MeasurementKind.POSITION, mk.track_m, variance))
         self._reader.read(mk.id)
 
-    def _gnss_speed(self, tau: float, speed: float, replay: int) -> int:
-        """Attach a GNSS speed measured at ``tau``; returns where to re-run from."""
+    def _gnss_speed(self, tau: float, speed: float) -> int | None:
+        """Attach a GNSS speed measured at ``tau``; returns its entry (where to
+        re-run from: an entry inserted at j shifts the later ones), ``None``
+        when it is older than the buffer."""
         j = self._buf.at_time(tau)
         if j is None:
             self.stale_measurements += 1
-            return replay
+            return None
         variance = self.cfg.gnss_speed_sigma**2
         self._buf.add(j, Measurement(MeasurementKind.SPEED, speed, variance))
         self._policy.speed_used(tau)
-        # an entry inserted at j <= replay shifts the later ones: j is then the start
-        return min(replay, j)
+        return j
+
+    def _gate_watch(self, j: int) -> None:
+        """Count the GNSS speeds the gate rejects in a row (the one just
+        attached at entry ``j`` is the last of its measurements).  A single
+        outlier is a receiver glitch; ``gnss_reject_limit`` in a row mean the
+        filter is confidently wrong, and the gate would keep GNSS out for
+        good: the speed starts again from this measurement."""
+        buf = self._buf
+        e = buf.entries[j]
+        assert e.measurements
+        m = e.measurements[-1]
+        x = self._model.update(e.prior, e.measurements[:-1])
+        if not self._model.speed_rejected(x, m.value, m.variance):
+            self.gnss_rejects = 0
+            return
+        self.gnss_rejects += 1
+        if self.gnss_rejects < self.cfg.gnss_reject_limit:
+            return
+        self.gnss_rejects = 0
+        e.measurements[-1] = Measurement(MeasurementKind.SPEED_RESTART, m.value, m.variance)
+        self._post = buf.replay(j)
 
     def _gnss_fix(self, tau: float, lat: float, lon: float) -> None:
         """Apply a GNSS geographic fix measured at ``tau`` if the policy wants it."""
@@ -313,6 +341,7 @@ class TrackFilter:
             last_gnss_t=self._policy.last_gnss_t,
             stale_measurements=self.stale_measurements,
             unknown_markers=self.unknown_markers,
+            gnss_rejects=self.gnss_rejects,
         ).to_json()
 
     @classmethod
@@ -328,6 +357,7 @@ class TrackFilter:
         f._policy.last_gnss_t = snap.last_gnss_t
         f.stale_measurements = snap.stale_measurements
         f.unknown_markers = snap.unknown_markers
+        f.gnss_rejects = snap.gnss_rejects
         if f._buf.entries:
             f._state = f._make_state()
         return f

@@ -193,7 +193,10 @@ class FilterConfig:
     initial_position_m: float | None = None  # None: unknown until a marker or fix
     initial_position_sigma: float = 5.0
     initial_speed_mps: float = 0.0
-    initial_speed_sigma: float = 0.05
+    # Unknown by default: a filter may start (an on-board unit restarting, a
+    # train first seen by the service) while the train runs; the first GNSS
+    # speed sets it.  Give a small σ only when the start is known to be standing.
+    initial_speed_sigma: float = 100.0
     unknown_position_sigma: float = 1e5
     lost_position_sigma: float = 50.0  # σ beyond which the position counts as unknown
     standstill_mps: float = 0.05
@@ -206,6 +209,15 @@ class FilterConfig:
     # The direction of motion is reported only when |speed| exceeds this many
     # σ of speed (and standstill_mps).
     direction_sigmas: float = 2.0
+    # σ of speed beyond which the speed counts as unknown (a person must look).
+    lost_speed_sigma: float = 5.0
+    # This many GNSS speeds in a row rejected by the gate mean the estimate,
+    # not the receiver, is wrong (the gate would otherwise lock GNSS out for
+    # good): speed and bias start again from the next GNSS speed, and the
+    # position, integrated from the wrong speed, becomes unknown.
+    gnss_reject_limit: int = 5
+    # The σ of speed given to a speed that starts again (unknown).
+    unknown_speed_sigma: float = 100.0
 
     def __post_init__(self) -> None:
         if self.orientation not in (1, -1):
@@ -216,6 +228,8 @@ class FilterConfig:
                 raise ValueError(f"{f.name} must be finite")
         if self.max_delay_s <= 0 or self.sample_rate_hz <= 0:
             raise ValueError("max_delay_s and sample_rate_hz must be positive")
+        if self.gnss_reject_limit < 1:
+            raise ValueError("gnss_reject_limit must be at least 1")
 
 
 def _opt_float(d: Mapping[str, Any], key: str) -> float | None:
