@@ -133,6 +133,7 @@ class TrackFilter:
         "stale_measurements",
         "unknown_markers",
         "gnss_rejects",
+        "_started_again",
     )
 
     def __init__(
@@ -150,6 +151,7 @@ class TrackFilter:
         self.stale_measurements = 0
         self.unknown_markers = 0
         self.gnss_rejects = 0  # GNSS speeds rejected in a row by the gate
+        self._started_again = False  # a gap beyond max_gap_s made everything unknown
 
     # -- public API ----------------------------------------------------------
     @property
@@ -185,6 +187,8 @@ class TrackFilter:
         delay = cfg.gnss_delay_s if gnss_delay_s is None else gnss_delay_s
         check_sample(t, accel_mps2, gnss_speed_mps, delay, gnss_lat, gnss_lon)
         buf = self._buf
+        if self._post is not None and self._beyond_gap(t):
+            self._start_again()
         post = self._post
         if post is not None and t > buf.entries[-1].t:
             i = buf.append(t, accel_mps2, post)  # a new newest sample: most of them
@@ -220,12 +224,33 @@ class TrackFilter:
 
     def _initial(self) -> Estimate:
         c = self.cfg
+        speed_var, bias_var = c.initial_speed_sigma**2, c.bias_sigma0**2
+        if self._started_again:  # nothing known about the train: the configured start is past
+            ps, speed_var = c.unknown_position_sigma**2, c.unknown_speed_sigma**2
+            return (0.0, 0.0, 0.0, ps, 0.0, 0.0, speed_var, 0.0, bias_var)
         if c.initial_position_m is None:
             s0, ps = 0.0, c.unknown_position_sigma**2
         else:
             s0, ps = c.initial_position_m, c.initial_position_sigma**2
-        speed_var, bias_var = c.initial_speed_sigma**2, c.bias_sigma0**2
         return (s0, c.initial_speed_mps, 0.0, ps, 0.0, 0.0, speed_var, 0.0, bias_var)
+
+    def _beyond_gap(self, t: float) -> bool:
+        """Whether ``t`` lies more than ``max_gap_s`` after the newest sample:
+        nothing can be integrated across that.  (A sample older than the buffer
+        is refused instead, :class:`StaleSampleError`: a late old batch must not
+        wipe a good estimate.)"""
+        return t - self._buf.entries[-1].t > self.cfg.max_gap_s
+
+    def _start_again(self) -> None:
+        """Forget the train's motion (not the counters): the next sample starts
+        the filter with position and speed unknown."""
+        c = self.cfg
+        self._buf.entries = []
+        self._post = None
+        self._reader = MarkerReader(self.table, c.reader_margin_m, c.missed_zone_m)
+        self._policy = GnssPolicy(c)
+        self.gnss_rejects = 0
+        self._started_again = True
 
     def _marker_read(self, i: int, marker_id: str) -> None:
         mk = self.table.get(marker_id)

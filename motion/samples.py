@@ -56,6 +56,9 @@ class SampleLimits:
     max_gnss_delay_s: float = 600.0
     max_abs_lat_deg: float = 90.0
     max_abs_lon_deg: float = 180.0
+    # The on-board clock, s: 1e10 s (317 years) admits a Unix-time clock; a
+    # larger |t| is a broken clock (and at 1e308 every time difference overflows).
+    max_abs_t_s: float = 1e10
 
 
 SAMPLE_LIMITS = SampleLimits()
@@ -93,6 +96,11 @@ def sample_problem(
     if bad is not None:
         return bad, f"{bad} must be a finite number"
     lim = limits
+    if abs(t) > lim.max_abs_t_s:
+        return "t", (
+            f"t must be within ±{lim.max_abs_t_s:g} s (the on-board clock, in seconds):"
+            " check the unit's clock"
+        )
     if abs(accel_mps2) > lim.max_abs_accel_mps2:
         return "accel_mps2", (
             f"accel_mps2 out of range (|a| > {lim.max_abs_accel_mps2:g} m/s²): "
@@ -218,6 +226,10 @@ class FilterConfig:
     gnss_reject_limit: int = 5
     # The σ of speed given to a speed that starts again (unknown).
     unknown_speed_sigma: float = 100.0
+    # The largest gap between samples the filter integrates across, s.  A sample
+    # further after the newest (the unit was off, or its clock jumped) starts the
+    # filter again from that sample with position and speed unknown.
+    max_gap_s: float = 30.0
 
     def __post_init__(self) -> None:
         if self.orientation not in (1, -1):
@@ -228,6 +240,8 @@ class FilterConfig:
                 raise ValueError(f"{f.name} must be finite")
         if self.max_delay_s <= 0 or self.sample_rate_hz <= 0:
             raise ValueError("max_delay_s and sample_rate_hz must be positive")
+        if self.max_gap_s < self.max_delay_s:
+            raise ValueError("max_gap_s must be at least max_delay_s")
         if self.gnss_reject_limit < 1:
             raise ValueError("gnss_reject_limit must be at least 1")
 
@@ -283,7 +297,7 @@ def check_sample(
     """
     lim = limits
     if (
-        math.isfinite(t)
+        -lim.max_abs_t_s <= t <= lim.max_abs_t_s
         and -lim.max_abs_accel_mps2 <= accel_mps2 <= lim.max_abs_accel_mps2
         and (gnss_speed_mps is None or 0.0 <= gnss_speed_mps < lim.max_gnss_speed_mps)
         and (delay_s is None or 0.0 <= delay_s <= lim.max_gnss_delay_s)

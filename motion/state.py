@@ -50,6 +50,7 @@ _ADDED_AFTER_V1 = frozenset(
         "lost_speed_sigma",
         "gnss_reject_limit",
         "unknown_speed_sigma",
+        "max_gap_s",
     }
 )
 _CONFIG_DEFAULTS = asdict(FilterConfig())

@@ -17,7 +17,7 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from motion.fusion import FilterConfig, TrackFilter
+from motion.fusion import FilterConfig, StaleSampleError, TrackFilter
 
 RATE_HZ = 10.0
 GNSS_DELAY_S = 1.0
@@ -126,3 +126,41 @@ def test_a_single_gnss_outlier_is_still_rejected() -> None:
         g = 30.0 if t == 15 else 10.0
         st = f.step(float(t), 0.0, g, 1.0)
     assert abs(st.speed_mps - 10.0) < 0.1 and math.isfinite(st.sigma_speed_mps)
+
+
+def _cruise(f: TrackFilter, seconds: int) -> None:
+    for t in range(seconds):
+        f.step(float(t), 0.0, 15.0, 1.0)
+
+
+def test_a_time_jump_beyond_the_largest_gap_starts_again_unknown() -> None:
+    """The trial: t = 1e9 after t ≈ 300 gave position −1.2e17 m, speed −2.4e8 m/s."""
+    f = TrackFilter(config=FilterConfig(initial_position_m=0.0))
+    _cruise(f, 300)
+    assert f.state is not None and f.state.position_known
+    st = f.step(1e9, 0.0)
+    assert not st.position_known and not _speed_known(f) and st.direction == 0
+    assert abs(st.speed_mps) < 200.0 and abs(st.position_m) < 1e6
+    # it continues from there (a reboot of the clock or a long switch-off)
+    for k in range(1, 6):
+        st = f.step(1e9 + k, 0.0, 15.0, 1.0)
+    assert _speed_known(f) and abs(st.speed_mps - 15.0) < 0.2
+    # a clock that goes back is refused (older than the buffer), the estimate kept
+    with pytest.raises(StaleSampleError):
+        f.step(301.0, 0.0)
+    assert f.state is not None and f.state.t == 1e9 + 5
+
+
+def test_a_gap_within_the_limit_is_integrated() -> None:
+    f = TrackFilter(config=FilterConfig(initial_position_m=0.0))
+    _cruise(f, 100)
+    st = f.step(99.0 + f.cfg.max_gap_s, 0.0, 15.0, 1.0)
+    assert st.position_known and _speed_known(f)
+
+
+@pytest.mark.parametrize("t", [1e308, -1e308, 1.1e10])
+def test_an_impossible_clock_is_refused_naming_t(t: float) -> None:
+    f = TrackFilter()
+    _cruise(f, 3)
+    with pytest.raises(ValueError, match=r"^t must be within"):
+        f.step(t, 0.0)

@@ -101,3 +101,11 @@ def test_a_train_seen_first_while_moving_follows_gnss(client: TestClient) -> Non
     position = client.get("/api/v1/trains/T7/position", headers=ADMIN).json()
     assert position["speed_known"] is True
     assert abs(position["speed_mps"] - 15.0) <= 3 * position["sigma_speed_mps"] + 1e-9
+
+
+def test_an_impossible_clock_is_refused_naming_t(client: TestClient) -> None:
+    keys = build_line(client)
+    bad = _moving_start(1, 15.0)[0] | {"t": 1e308}
+    response = client.post("/api/v1/events", json={"events": [bad]}, headers=keys["T-obu"])
+    text = response.text
+    assert "t must be within" in text and "cannot be stored" not in text, text
