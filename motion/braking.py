@@ -38,10 +38,15 @@ controller (:func:`braking_error_monte_carlo`).  The paper's train models
 is a point mass with a first-order brake, a Davis-type running resistance
 with a per-run deviation, and an odometer integrating the measured speed.
 Its error ranges are of the paper's order (metres), not the paper's figures.
+
+Every calculator refuses inputs outside :data:`BRAKING_LIMITS` (a
+``ValueError`` naming the quantity, its unit and the range), so the API and
+the CLI refuse the same values.
 """
 
 from __future__ import annotations
 
+from .braking_limits import BRAKING_LIMITS, BrakingLimits
 from .braking_mc import MonteCarloResult, braking_error_monte_carlo
 from .pearson import PearsonI, fit_pearson1
 from .protective import BrakingPlan, ErrorModel, G, braking_distance, braking_plan, max_safe_speed
@@ -58,6 +63,8 @@ from .trials import (
 )
 
 __all__ = [
+    "BRAKING_LIMITS",
+    "BrakingLimits",
     "G",
     "PAPER_TABLE1",
     "SIL4",

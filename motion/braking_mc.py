@@ -12,6 +12,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .braking_limits import BRAKING_LIMITS, check_range
 from .pearson import PearsonI, fit_pearson1
 from .protective import G
 from .trials import p_max_for_trials, trials_needed
@@ -146,8 +147,9 @@ def braking_error_monte_carlo(
     """
     if control not in ("deceleration", "speed"):
         raise ValueError("control must be 'deceleration' or 'speed'")
-    if runs < 2:
-        raise ValueError("runs must be at least 2")
+    if runs < 2 or runs > BRAKING_LIMITS.max_monte_carlo_runs:
+        raise ValueError(f"runs must be in [2, {BRAKING_LIMITS.max_monte_carlo_runs}]")
+    check_range("speed", speed_mps, 0.0, BRAKING_LIMITS.max_speed_mps, "m/s", low_open=True)
     unknown = set(params) - set(_MC_DEFAULTS)
     if unknown:
         raise ValueError(f"unknown model parameters: {sorted(unknown)}")

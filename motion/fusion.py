@@ -132,6 +132,8 @@ class TrackFilter:
         "_state",
         "stale_measurements",
         "unknown_markers",
+        "gnss_rejects",
+        "_started_again",
     )
 
     def __init__(
@@ -148,6 +150,8 @@ class TrackFilter:
         self._state: TrackState | None = None
         self.stale_measurements = 0
         self.unknown_markers = 0
+        self.gnss_rejects = 0  # GNSS speeds rejected in a row by the gate
+        self._started_again = False  # a gap beyond max_gap_s made everything unknown
 
     # -- public API ----------------------------------------------------------
     @property
@@ -183,6 +187,8 @@ class TrackFilter:
         delay = cfg.gnss_delay_s if gnss_delay_s is None else gnss_delay_s
         check_sample(t, accel_mps2, gnss_speed_mps, delay, gnss_lat, gnss_lon)
         buf = self._buf
+        if self._post is not None and self._beyond_gap(t):
+            self._start_again()
         post = self._post
         if post is not None and t > buf.entries[-1].t:
             i = buf.append(t, accel_mps2, post)  # a new newest sample: most of them
@@ -191,9 +197,13 @@ class TrackFilter:
         replay = i
         if marker_id is not None:  # a marker read: an exact position at the sample's time
             self._marker_read(i, marker_id)
+        j = None
         if gnss_speed_mps is not None:  # the delayed GNSS speed at its own time
-            replay = self._gnss_speed(t - delay, gnss_speed_mps, replay)
+            j = self._gnss_speed(t - delay, gnss_speed_mps)
+            replay = replay if j is None else min(replay, j)
         self._post = buf.replay(replay)
+        if j is not None:
+            self._gate_watch(j)
         # The delayed GNSS fix: only in a missed marker's zone or with the position unknown.
         if gnss_lat is not None and gnss_lon is not None and self.table.has_geometry:
             self._gnss_fix(t - delay, gnss_lat, gnss_lon)
@@ -214,12 +224,33 @@ class TrackFilter:
 
     def _initial(self) -> Estimate:
         c = self.cfg
+        speed_var, bias_var = c.initial_speed_sigma**2, c.bias_sigma0**2
+        if self._started_again:  # nothing known about the train: the configured start is past
+            ps, speed_var = c.unknown_position_sigma**2, c.unknown_speed_sigma**2
+            return (0.0, 0.0, 0.0, ps, 0.0, 0.0, speed_var, 0.0, bias_var)
         if c.initial_position_m is None:
             s0, ps = 0.0, c.unknown_position_sigma**2
         else:
             s0, ps = c.initial_position_m, c.initial_position_sigma**2
-        speed_var, bias_var = c.initial_speed_sigma**2, c.bias_sigma0**2
         return (s0, c.initial_speed_mps, 0.0, ps, 0.0, 0.0, speed_var, 0.0, bias_var)
+
+    def _beyond_gap(self, t: float) -> bool:
+        """Whether ``t`` lies more than ``max_gap_s`` after the newest sample:
+        nothing can be integrated across that.  (A sample older than the buffer
+        is refused instead, :class:`StaleSampleError`: a late old batch must not
+        wipe a good estimate.)"""
+        return t - self._buf.entries[-1].t > self.cfg.max_gap_s
+
+    def _start_again(self) -> None:
+        """Forget the train's motion (not the counters): the next sample starts
+        the filter with position and speed unknown."""
+        c = self.cfg
+        self._buf.entries = []
+        self._post = None
+        self._reader = MarkerReader(self.table, c.reader_margin_m, c.missed_zone_m)
+        self._policy = GnssPolicy(c)
+        self.gnss_rejects = 0
+        self._started_again = True
 
     def _marker_read(self, i: int, marker_id: str) -> None:
         mk = self.table.get(marker_id)
@@ -230,17 +261,39 @@ class TrackFilter:
         self._buf.add(i, Measurement(MeasurementKind.POSITION, mk.track_m, variance))
         self._reader.read(mk.id)
 
-    def _gnss_speed(self, tau: float, speed: float, replay: int) -> int:
-        """Attach a GNSS speed measured at ``tau``; returns where to re-run from."""
+    def _gnss_speed(self, tau: float, speed: float) -> int | None:
+        """Attach a GNSS speed measured at ``tau``; returns its entry (where to
+        re-run from: an entry inserted at j shifts the later ones), ``None``
+        when it is older than the buffer."""
         j = self._buf.at_time(tau)
         if j is None:
             self.stale_measurements += 1
-            return replay
+            return None
         variance = self.cfg.gnss_speed_sigma**2
         self._buf.add(j, Measurement(MeasurementKind.SPEED, speed, variance))
         self._policy.speed_used(tau)
-        # an entry inserted at j <= replay shifts the later ones: j is then the start
-        return min(replay, j)
+        return j
+
+    def _gate_watch(self, j: int) -> None:
+        """Count the GNSS speeds the gate rejects in a row (the one just
+        attached at entry ``j`` is the last of its measurements).  A single
+        outlier is a receiver glitch; ``gnss_reject_limit`` in a row mean the
+        filter is confidently wrong, and the gate would keep GNSS out for
+        good: the speed starts again from this measurement."""
+        buf = self._buf
+        e = buf.entries[j]
+        assert e.measurements
+        m = e.measurements[-1]
+        x = self._model.update(e.prior, e.measurements[:-1])
+        if not self._model.speed_rejected(x, m.value, m.variance):
+            self.gnss_rejects = 0
+            return
+        self.gnss_rejects += 1
+        if self.gnss_rejects < self.cfg.gnss_reject_limit:
+            return
+        self.gnss_rejects = 0
+        e.measurements[-1] = Measurement(MeasurementKind.SPEED_RESTART, m.value, m.variance)
+        self._post = buf.replay(j)
 
     def _gnss_fix(self, tau: float, lat: float, lon: float) -> None:
         """Apply a GNSS geographic fix measured at ``tau`` if the policy wants it."""
@@ -313,6 +366,7 @@ class TrackFilter:
             last_gnss_t=self._policy.last_gnss_t,
             stale_measurements=self.stale_measurements,
             unknown_markers=self.unknown_markers,
+            gnss_rejects=self.gnss_rejects,
         ).to_json()
 
     @classmethod
@@ -328,6 +382,7 @@ class TrackFilter:
         f._policy.last_gnss_t = snap.last_gnss_t
         f.stale_measurements = snap.stale_measurements
         f.unknown_markers = snap.unknown_markers
+        f.gnss_rejects = snap.gnss_rejects
         if f._buf.entries:
             f._state = f._make_state()
         return f

@@ -62,10 +62,14 @@ class MeasurementKind(IntEnum):
 
     POSITION = 0  # the track coordinate (a marker read or a projected GNSS fix)
     SPEED = 1  # |u| (GNSS speed over ground)
+    # |u| after a run of GNSS speeds the gate rejected: the estimate was wrong,
+    # so speed and bias start again (position unknown) and this one is applied.
+    SPEED_RESTART = 2
 
 
 # (an enum member is looked up on its class at every use: ~0.2 µs in the update loop)
 _POSITION = int(MeasurementKind.POSITION)
+_RESTART = int(MeasurementKind.SPEED_RESTART)
 
 
 class Measurement(NamedTuple):
@@ -79,7 +83,7 @@ class Measurement(NamedTuple):
 class KalmanModel:
     """Prediction and update for one filter configuration and marker table."""
 
-    __slots__ = ("table", "o", "qa", "qb", "gate2", "grad")
+    __slots__ = ("table", "o", "qa", "qb", "gate2", "grad", "restart")
 
     def __init__(self, table: MarkerTable, cfg: FilterConfig) -> None:
         self.table = table
@@ -90,6 +94,12 @@ class KalmanModel:
         self.qb = cfg.bias_walk**2
         self.gate2 = cfg.gnss_gate**2
         self.grad = table.has_gradients
+        # variances of position, speed and bias when the speed starts again
+        self.restart = (
+            cfg.unknown_position_sigma**2,
+            cfg.unknown_speed_sigma**2,
+            cfg.bias_sigma0**2,
+        )
 
     def gravity_along(self, s: float) -> float:
         """The gradient's acceleration at coordinate ``s`` (m/s², 0 without a profile)."""
@@ -130,6 +140,8 @@ class KalmanModel:
     def update(self, x: Estimate, measurements: Sequence[Measurement]) -> Estimate:
         """``x`` after the scalar Kalman updates of ``measurements``, in order."""
         for kind, z, r in measurements:
+            if kind == _RESTART:
+                x = self._restarted(x)
             s, u, b, p00, p01, p02, p11, p12, p22 = x
             if kind == _POSITION:
                 y = z - s
@@ -140,7 +152,7 @@ class KalmanModel:
                 y = (1.0 if u >= 0.0 else -1.0) * z - u
                 c0, c1, c2 = p01, p11, p12  # P·Hᵀ with H = [0, ±1, 0]
                 sv = c1 + r
-                if y * y > self.gate2 * sv:
+                if kind != _RESTART and y * y > self.gate2 * sv:
                     continue  # an outlier (multipath, re-acquisition glitch)
             k0, k1, k2 = c0 / sv, c1 / sv, c2 / sv
             x = (
@@ -155,3 +167,16 @@ class KalmanModel:
                 p22 - k2 * c2,
             )
         return x
+
+    def _restarted(self, x: Estimate) -> Estimate:
+        """``x`` with speed, bias and position unknown (the bias back to 0):
+        what a filter that lost track of its speed honestly knows."""
+        s, u, _, *_ = x
+        ps, pu, pb = self.restart
+        return (s, u, 0.0, ps, 0.0, 0.0, pu, 0.0, pb)
+
+    def speed_rejected(self, x: Estimate, z: float, r: float) -> bool:
+        """Whether the gate in :meth:`update` rejects the speed ``z`` (variance ``r``) at ``x``."""
+        _, u, _, _, _, _, p11, _, _ = x
+        y = (1.0 if u >= 0.0 else -1.0) * z - u
+        return y * y > self.gate2 * (p11 + r)

@@ -9,6 +9,7 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from .braking_limits import BRAKING_LIMITS, check_range
 from .trials import SIL4, exceedance
 
 G = 9.81
@@ -27,14 +28,35 @@ def braking_distance(
     """``S_brake(V) = V·t_r + V²/(2·(b + g·i/1000))``.
 
     ``gradient_permille`` is positive uphill (helps braking), negative
-    downhill.  Raises if the gradient overcomes the brake.
+    downhill.  Raises ``ValueError`` for an input outside
+    :data:`~motion.braking_limits.BRAKING_LIMITS`, or if the gradient
+    overcomes the brake.
     """
-    if speed_mps < 0 or reaction_time_s < 0:
-        raise ValueError("speed and reaction time must be non-negative")
+    check_train(speed_mps, deceleration_mps2, reaction_time_s, gradient_permille)
     a = deceleration_mps2 + G * gradient_permille / 1000.0
     if a <= 0:
         raise ValueError(_no_braking(deceleration_mps2, gradient_permille))
     return speed_mps * reaction_time_s + speed_mps**2 / (2 * a)
+
+
+def check_train(
+    speed_mps: float,
+    deceleration_mps2: float,
+    reaction_time_s: float = 0.0,
+    gradient_permille: float = 0.0,
+    *,
+    moving: bool = False,
+) -> None:
+    """``ValueError`` naming the first of the train's quantities outside its
+    range (``moving``: the speed must be positive)."""
+    lim = BRAKING_LIMITS
+    check_range("speed", speed_mps, 0.0, lim.max_speed_mps, "m/s", low_open=moving)
+    check_range(
+        "deceleration", deceleration_mps2, 0.0, lim.max_deceleration_mps2, "m/s²", low_open=True
+    )
+    check_range("reaction time", reaction_time_s, 0.0, lim.max_reaction_time_s, "s")
+    g = lim.max_abs_gradient_permille
+    check_range("gradient", gradient_permille, -g, g, "‰")
 
 
 @dataclass(frozen=True)
@@ -58,6 +80,22 @@ class ErrorModel:
     measurements: int = 1
     channels: int = 1
     measurement_time_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        """Refuse a model that would invert the margin or claim certainty."""
+        lim = BRAKING_LIMITS
+        check_range("ΔS_max", self.delta_s_max_m, 0.0, lim.max_margin_m, "m")
+        check_range("ΔL_max", self.delta_l_max_m, 0.0, lim.max_margin_m, "m")
+        check_range("p_s", self.p_s, 0.0, 1.0, "", low_open=True)
+        check_range("p_l", self.p_l, 0.0, 1.0, "", low_open=True)
+        check_range("measurements k", self.measurements, 1, lim.max_measurements, "")
+        check_range("channels", self.channels, 1, lim.max_channels, "")
+        check_range(
+            "measurement time", self.measurement_time_s, 0.0, lim.max_measurement_time_s, "s"
+        )
+        for name in ("measurements", "channels"):
+            if int(getattr(self, name)) != getattr(self, name):
+                raise ValueError(f"{name} must be a whole number")
 
 
 @dataclass(frozen=True)
@@ -99,6 +137,9 @@ def braking_plan(
     """
     em = errors or ErrorModel()
     s = braking_distance(speed_mps, deceleration_mps2, reaction_time_s, gradient_permille)
+    if obstacle_at_m is not None:
+        c = BRAKING_LIMITS.max_abs_coordinate_m
+        check_range("obstacle coordinate", obstacle_at_m, -c, c, "m")
     dl = em.delta_l_max_m + speed_mps * em.measurements * em.measurement_time_s
     prot = em.delta_s_max_m + dl
     brake_at = s + prot
@@ -133,6 +174,9 @@ def max_safe_speed(
     """The highest speed whose braking start point (6) is not beyond
     ``measured_distance_m``: solves ``V·t_r + V²/(2a) + ΔS + ΔL₀ + V·k·τ = L``."""
     em = errors or ErrorModel()
+    check_train(0.0, deceleration_mps2, reaction_time_s, gradient_permille)
+    c = BRAKING_LIMITS.max_abs_coordinate_m
+    check_range("measured distance", measured_distance_m, 0.0, c, "m")
     a = deceleration_mps2 + G * gradient_permille / 1000.0
     if a <= 0:
         raise ValueError(_no_braking(deceleration_mps2, gradient_permille))

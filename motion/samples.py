@@ -56,6 +56,9 @@ class SampleLimits:
     max_gnss_delay_s: float = 600.0
     max_abs_lat_deg: float = 90.0
     max_abs_lon_deg: float = 180.0
+    # The on-board clock, s: 1e10 s (317 years) admits a Unix-time clock; a
+    # larger |t| is a broken clock (and at 1e308 every time difference overflows).
+    max_abs_t_s: float = 1e10
 
 
 SAMPLE_LIMITS = SampleLimits()
@@ -93,6 +96,11 @@ def sample_problem(
     if bad is not None:
         return bad, f"{bad} must be a finite number"
     lim = limits
+    if abs(t) > lim.max_abs_t_s:
+        return "t", (
+            f"t must be within ±{lim.max_abs_t_s:g} s (the on-board clock, in seconds):"
+            " check the unit's clock"
+        )
     if abs(accel_mps2) > lim.max_abs_accel_mps2:
         return "accel_mps2", (
             f"accel_mps2 out of range (|a| > {lim.max_abs_accel_mps2:g} m/s²): "
@@ -193,7 +201,10 @@ class FilterConfig:
     initial_position_m: float | None = None  # None: unknown until a marker or fix
     initial_position_sigma: float = 5.0
     initial_speed_mps: float = 0.0
-    initial_speed_sigma: float = 0.05
+    # Unknown by default: a filter may start (an on-board unit restarting, a
+    # train first seen by the service) while the train runs; the first GNSS
+    # speed sets it.  Give a small σ only when the start is known to be standing.
+    initial_speed_sigma: float = 100.0
     unknown_position_sigma: float = 1e5
     lost_position_sigma: float = 50.0  # σ beyond which the position counts as unknown
     standstill_mps: float = 0.05
@@ -206,6 +217,19 @@ class FilterConfig:
     # The direction of motion is reported only when |speed| exceeds this many
     # σ of speed (and standstill_mps).
     direction_sigmas: float = 2.0
+    # σ of speed beyond which the speed counts as unknown (a person must look).
+    lost_speed_sigma: float = 5.0
+    # This many GNSS speeds in a row rejected by the gate mean the estimate,
+    # not the receiver, is wrong (the gate would otherwise lock GNSS out for
+    # good): speed and bias start again from the next GNSS speed, and the
+    # position, integrated from the wrong speed, becomes unknown.
+    gnss_reject_limit: int = 5
+    # The σ of speed given to a speed that starts again (unknown).
+    unknown_speed_sigma: float = 100.0
+    # The largest gap between samples the filter integrates across, s.  A sample
+    # further after the newest (the unit was off, or its clock jumped) starts the
+    # filter again from that sample with position and speed unknown.
+    max_gap_s: float = 30.0
 
     def __post_init__(self) -> None:
         if self.orientation not in (1, -1):
@@ -216,6 +240,10 @@ class FilterConfig:
                 raise ValueError(f"{f.name} must be finite")
         if self.max_delay_s <= 0 or self.sample_rate_hz <= 0:
             raise ValueError("max_delay_s and sample_rate_hz must be positive")
+        if self.max_gap_s < self.max_delay_s:
+            raise ValueError("max_gap_s must be at least max_delay_s")
+        if self.gnss_reject_limit < 1:
+            raise ValueError("gnss_reject_limit must be at least 1")
 
 
 def _opt_float(d: Mapping[str, Any], key: str) -> float | None:
@@ -269,7 +297,7 @@ def check_sample(
     """
     lim = limits
     if (
-        math.isfinite(t)
+        -lim.max_abs_t_s <= t <= lim.max_abs_t_s
         and -lim.max_abs_accel_mps2 <= accel_mps2 <= lim.max_abs_accel_mps2
         and (gnss_speed_mps is None or 0.0 <= gnss_speed_mps < lim.max_gnss_speed_mps)
         and (delay_s is None or 0.0 <= delay_s <= lim.max_gnss_delay_s)

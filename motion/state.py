@@ -14,7 +14,14 @@ during an upgrade).  The document, a few kB::
      "post": [s, u, b, p00, p01, p02, p11, p12, p22],
      "reader": {<MarkerReader.to_dict()>},
      "last_fix_t": t | null, "last_gnss_t": t | null,
-     "counters": [stale_measurements, unknown_markers]}
+     "counters": [stale_measurements, unknown_markers],
+     "gnss_rejects": n}          # only when n > 0 (added after version 1)
+
+``gnss_rejects`` counts the GNSS speeds rejected in a row by the gate; it is
+written only while non-zero, so a healthy filter keeps the version-1 form and
+an older worker (which ignores the key) still reads the document.  A buffer
+measurement of kind 2 (:attr:`~motion.model.MeasurementKind.SPEED_RESTART`)
+is written only after such a run of rejections.
 
 ``config`` holds every version-1 field, and a field added since only when it
 differs from its default (so default-tuned snapshots keep the version-1 form).
@@ -35,7 +42,17 @@ __all__ = ["SNAPSHOT_VERSION", "Snapshot"]
 
 SNAPSHOT_VERSION = 1
 # FilterConfig fields added after version 1: written only when not at their default.
-_ADDED_AFTER_V1 = frozenset({"fix_offset_sigmas", "fix_offset_margin_m", "direction_sigmas"})
+_ADDED_AFTER_V1 = frozenset(
+    {
+        "fix_offset_sigmas",
+        "fix_offset_margin_m",
+        "direction_sigmas",
+        "lost_speed_sigma",
+        "gnss_reject_limit",
+        "unknown_speed_sigma",
+        "max_gap_s",
+    }
+)
 _CONFIG_DEFAULTS = asdict(FilterConfig())
 
 
@@ -69,10 +86,11 @@ class Snapshot:
     last_gnss_t: float | None
     stale_measurements: int = 0
     unknown_markers: int = 0
+    gnss_rejects: int = 0
 
     def to_json(self) -> dict[str, Any]:
         """The JSON-safe document (key order fixed: it is compared byte for byte)."""
-        return {
+        doc: dict[str, Any] = {
             "version": SNAPSHOT_VERSION,
             "table": self.table_fingerprint,
             "config": _encode_config(self.config),
@@ -83,6 +101,9 @@ class Snapshot:
             "last_gnss_t": self.last_gnss_t,
             "counters": [self.stale_measurements, self.unknown_markers],
         }
+        if self.gnss_rejects:
+            doc["gnss_rejects"] = self.gnss_rejects
+        return doc
 
     @classmethod
     def from_json(cls, d: Mapping[str, Any], table_fingerprint: str) -> Snapshot:
@@ -106,4 +127,5 @@ class Snapshot:
             last_gnss_t=None if lg is None else float(lg),
             stale_measurements=stale,
             unknown_markers=unknown,
+            gnss_rejects=int(d.get("gnss_rejects", 0)),
         )

@@ -6,7 +6,18 @@ Kept apart from :mod:`service.commands.motion`, which binds each parser to its c
 from __future__ import annotations
 
 import argparse
+import re
 from typing import Any
+
+# argparse takes "-1e6" (or "-inf") for an option and says "expected one argument";
+# these parsers have no option that looks like a number, so any number is a value.
+# (``--gradient=-1e6`` works with any parser.)
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.I)
+
+
+def _numbers_may_be_negative(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    parser._negative_number_matcher = _NEGATIVE_NUMBER
+    return parser
 
 
 def add_braking_parsers(sub: Any) -> dict[str, argparse.ArgumentParser]:
@@ -37,7 +48,12 @@ def add_braking_parsers(sub: Any) -> dict[str, argparse.ArgumentParser]:
     sp.add_argument("--speed-kmh", type=float, help="speed, km/h (or --speed)")
     pl.add_argument("--decel", type=float, required=True, help="braking deceleration, m/s²")
     pl.add_argument("--reaction-time", type=float, default=0.0, help="reaction time, s")
-    pl.add_argument("--gradient", type=float, default=0.0, help="gradient, ‰, positive uphill")
+    pl.add_argument(
+        "--gradient",
+        type=float,
+        default=0.0,
+        help="gradient, ‰, positive uphill, negative downhill (e.g. --gradient -8), within ±70",
+    )
     pl.add_argument(
         "--delta-s-max", type=float, default=3.0, help="largest negative braking error, m"
     )
@@ -84,4 +100,6 @@ def add_braking_parsers(sub: Any) -> dict[str, argparse.ArgumentParser]:
         "--png", default=None, metavar="FILE", help="write the histogram here (default: none)"
     )
     m.add_argument("--json", action="store_true", help="print JSON instead of text")
+    for parser in (pl, m):
+        _numbers_may_be_negative(parser)
     return {"trials": t, "exceedance": x, "plan": pl, "montecarlo": m}

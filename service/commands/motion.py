@@ -147,16 +147,16 @@ def _speed_arg(args: argparse.Namespace) -> float:
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
-    em = braking.ErrorModel(
-        delta_s_max_m=args.delta_s_max,
-        p_s=args.p_s,
-        delta_l_max_m=args.delta_l_max,
-        p_l=args.p_l,
-        measurements=args.k,
-        channels=args.channels,
-        measurement_time_s=args.measurement_time,
-    )
     try:
+        em = braking.ErrorModel(
+            delta_s_max_m=args.delta_s_max,
+            p_s=args.p_s,
+            delta_l_max_m=args.delta_l_max,
+            p_l=args.p_l,
+            measurements=args.k,
+            channels=args.channels,
+            measurement_time_s=args.measurement_time,
+        )
         plan = braking.braking_plan(
             _speed_arg(args),
             args.decel,

@@ -20,6 +20,10 @@ class TrainPositionOut(BaseModel):
     direction: int = Field(description="1 forward, -1 backward, 0 standing")
     sigma_position_m: float = Field(description="one standard deviation of the position, m")
     sigma_speed_mps: float
+    speed_known: bool = Field(
+        description="false when the speed's uncertainty is too large to use (e.g. before the"
+        " first GNSS speed of a train first seen while moving): a person must look"
+    )
     position_known: bool = Field(description="false when the uncertainty is too large to use")
     reader_on: bool
     next_marker_id: str | None

@@ -10,7 +10,7 @@ from sqlalchemy import select
 from core.auth import Admin, CurrentReader
 from core.database import DbSession
 from service.strict_json import StrictJSONRoute
-from service.trains import service
+from service.trains import braking, service
 from service.trains.models import TrackMarker
 from service.trains.responses import TrainPositionOut
 from service.trains.schemas import MarkerIn, MarkerOut
@@ -32,3 +32,10 @@ def list_markers(session: DbSession, _: CurrentReader) -> Any:
 def train_position(train: str, session: DbSession, _: CurrentReader) -> dict[str, Any]:
     """Coordinate, speed, section and their uncertainty from the train's fused sensors."""
     return service.position(session, train)
+
+
+@router.post("/motion/braking-plan", response_model=braking.BrakingPlanOut)
+def braking_plan(body: braking.BrakingPlanIn, _: CurrentReader) -> braking.BrakingPlanOut:
+    """Protective section and braking start point for a train (seed 001, eq. 6–7),
+    as ``depot braking plan``; inputs outside the documented ranges are refused."""
+    return braking.plan(body)

@@ -73,4 +73,12 @@ def position(session: Session, train: str) -> dict[str, Any]:
     row = session.get(TrainPosition, train)
     if row is None or not row.state:
         raise NotFound(f"no motion samples received for train {train!r}")
-    return {"train": train, "updated_at": row.updated_at.isoformat(), **row.state}
+    # Stated on every answer (also for states stored before the field existed):
+    # a speed whose σ is beyond FilterConfig.lost_speed_sigma is not known.
+    known = float(row.state["sigma_speed_mps"]) <= FilterConfig().lost_speed_sigma
+    return {
+        "train": train,
+        "updated_at": row.updated_at.isoformat(),
+        **row.state,
+        "speed_known": known,
+    }

@@ -211,7 +211,7 @@ def test_optical_speed_refuses_a_photo_without_stripes(
 def test_plan_names_why_a_train_would_not_stop(capsys: pytest.CaptureFixture[str]) -> None:
     """``--decel 0`` on the level blamed "the downhill gradient" (found by the second trial)."""
     assert cmd.main(["braking", "plan", "--speed", "10", "--decel", "0"]) == 2
-    assert "deceleration must be positive" in capsys.readouterr().err
+    assert "deceleration must be a finite number in (0, " in capsys.readouterr().err
     downhill = ["braking", "plan", "--speed", "10", "--decel", "0.1", "--gradient", "-30"]
     assert cmd.main(downhill) == 2
     assert "downhill gradient (-30 ‰)" in capsys.readouterr().err

@@ -65,6 +65,7 @@ ENDPOINTS: list[tuple[str, str, frozenset[str]]] = [
     ("PUT", "/api/v1/maintenance/parameters/{name}", ENGINEER),
     ("POST", "/api/v1/cars/{car_id}/maintenance-decision", ENGINEER),
     ("GET", "/api/v1/trains/{train}/position", READERS),
+    ("POST", "/api/v1/motion/braking-plan", READERS),  # a calculator: no state changed
     ("POST", "/api/v1/markers", ADMIN_ONLY),
     ("GET", "/api/v1/markers", READERS),
     ("GET", "/metrics", ADMIN_ONLY),  # or DEPOT_METRICS_TOKEN (test_service_metrics.py)

@@ -67,3 +67,45 @@ def test_position_unknown_train_and_roles(client: TestClient) -> None:
     assert client.post("/api/v1/markers", json=duplicate, headers=ADMIN).status_code == 409
     bad = client.post("/api/v1/markers", json={"id": "M9", "track_m": -1}, headers=ADMIN)
     assert bad.status_code == 422
+
+
+def _moving_start(seconds: int, speed: float) -> list[dict]:
+    """The independent trial's batch: 1 Hz, accel 0, GNSS 1 s late, train already moving."""
+    return [
+        {
+            "event_id": f"mv-{i}",
+            "occurred_at": iso(T0 + timedelta(seconds=i)),
+            "kind": "motion_sample",
+            "train": "T7",
+            "t": float(i),
+            "accel_mps2": 0.0,
+            "gnss_speed_mps": speed,
+            "gnss_delay_s": 1.0,
+        }
+        for i in range(seconds)
+    ]
+
+
+def test_a_train_seen_first_while_moving_follows_gnss(client: TestClient) -> None:
+    keys = build_line(client)
+    first = client.post(
+        "/api/v1/events", json={"events": _moving_start(1, 15.0)}, headers=keys["T-obu"]
+    )
+    assert first.status_code == 200
+    position = client.get("/api/v1/trains/T7/position", headers=ADMIN).json()
+    # one sample, its GNSS speed older than the filter: the speed is not known yet
+    assert position["speed_known"] is False and position["direction"] == 0
+    batch = _moving_start(300, 15.0)[1:]
+    response = client.post("/api/v1/events", json={"events": batch}, headers=keys["T-obu"])
+    assert response.status_code == 200
+    position = client.get("/api/v1/trains/T7/position", headers=ADMIN).json()
+    assert position["speed_known"] is True
+    assert abs(position["speed_mps"] - 15.0) <= 3 * position["sigma_speed_mps"] + 1e-9
+
+
+def test_an_impossible_clock_is_refused_naming_t(client: TestClient) -> None:
+    keys = build_line(client)
+    bad = _moving_start(1, 15.0)[0] | {"t": 1e308}
+    response = client.post("/api/v1/events", json={"events": [bad]}, headers=keys["T-obu"])
+    text = response.text
+    assert "t must be within" in text and "cannot be stored" not in text, text

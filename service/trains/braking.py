@@ -1,0 +1,86 @@
+"""``POST /motion/braking-plan``: the protective section and braking start point
+of seed 001 (eq. 6–7) for one train, as ``depot braking plan`` computes it.
+
+The ranges are the domain's (:data:`motion.braking.BRAKING_LIMITS`): a value
+outside them is answered 422 problem+json with the domain's message, the same
+words the CLI prints.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from core.errors import Unprocessable
+from motion import braking
+
+Number = Annotated[float, Field(allow_inf_nan=False)]
+
+
+class ErrorModelIn(BaseModel):
+    """Error bounds entering the protective section (defaults as ``depot braking plan``)."""
+
+    model_config = ConfigDict(extra="forbid")
+    delta_s_max_m: Number = Field(3.0, description="largest negative braking-distance error, m")
+    p_s: Number = Field(1e-2, description="probability of exceeding delta_s_max_m, (0, 1]")
+    delta_l_max_m: Number = Field(
+        0.0, description="largest positive range error of one measurement, m"
+    )
+    p_l: Number = Field(1e-2, description="probability one measurement exceeds delta_l_max_m")
+    measurements: int = Field(1, description="measurements per channel (the smallest is used)")
+    channels: int = Field(1, description="independent channels")
+    measurement_time_s: Number = Field(0.0, description="duration of one measurement, s")
+
+
+class BrakingPlanIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    speed_mps: Number = Field(description="speed, m/s")
+    deceleration_mps2: Number = Field(description="braking deceleration, m/s²")
+    reaction_time_s: Number = Field(0.0, description="reaction time, s")
+    gradient_permille: Number = Field(0.0, description="gradient, ‰, positive uphill")
+    errors: ErrorModelIn = Field(default_factory=ErrorModelIn)
+    obstacle_at_m: Number | None = Field(None, description="obstacle track coordinate, m")
+
+
+class BrakingPlanOut(BaseModel):
+    speed_mps: float
+    deceleration_mps2: float
+    reaction_time_s: float
+    gradient_permille: float
+    braking_distance_m: float = Field(description="S_brake(V), reaction distance included")
+    reaction_distance_m: float
+    delta_s_max_m: float
+    delta_l_max_m: float = Field(description="one measurement's bound + distance run during k")
+    protective_section_m: float = Field(description="ΔS_max + ΔL_max")
+    brake_at_measured_distance_m: float = Field(description="brake when L_meas falls to this")
+    brake_start_coordinate_m: float | None
+    range_exceedance: float = Field(description="p_l^(k·channels)")
+    collision_probability_bound: float = Field(description="eq. (7)")
+    meets_sil4: bool
+
+
+def plan(body: BrakingPlanIn) -> BrakingPlanOut:
+    """The plan, or :class:`Unprocessable` with the domain's message."""
+    e = body.errors
+    try:
+        errors = braking.ErrorModel(
+            delta_s_max_m=e.delta_s_max_m,
+            p_s=e.p_s,
+            delta_l_max_m=e.delta_l_max_m,
+            p_l=e.p_l,
+            measurements=e.measurements,
+            channels=e.channels,
+            measurement_time_s=e.measurement_time_s,
+        )
+        result = braking.braking_plan(
+            body.speed_mps,
+            body.deceleration_mps2,
+            reaction_time_s=body.reaction_time_s,
+            gradient_permille=body.gradient_permille,
+            errors=errors,
+            obstacle_at_m=body.obstacle_at_m,
+        )
+    except ValueError as exc:
+        raise Unprocessable(str(exc)) from exc
+    return BrakingPlanOut(**result.as_dict())

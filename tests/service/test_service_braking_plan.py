@@ -1,0 +1,50 @@
+"""POST /api/v1/motion/braking-plan: the braking calculator of seed 001 over the
+API, refusing what the CLI refuses (the same domain checks, problem+json)."""
+
+from __future__ import annotations
+
+from fastapi.testclient import TestClient
+
+from tests.conftest import ADMIN
+
+URL = "/api/v1/motion/braking-plan"
+
+
+def test_a_plan_with_two_channels_meets_sil4(client: TestClient) -> None:
+    body = {
+        "speed_mps": 20.0,
+        "deceleration_mps2": 1.0,
+        "gradient_permille": -8.0,
+        "errors": {"delta_l_max_m": 400.0, "measurements": 2, "channels": 2},
+        "obstacle_at_m": 5000.0,
+    }
+    answer = client.post(URL, json=body, headers=ADMIN)
+    assert answer.status_code == 200, answer.text
+    plan = answer.json()
+    assert plan["meets_sil4"] is True and plan["protective_section_m"] == 403.0
+    assert plan["brake_start_coordinate_m"] < 5000.0 - 403.0
+
+
+def test_an_inverted_margin_is_refused_as_problem_json(client: TestClient) -> None:
+    for body, named in (
+        (
+            {
+                "speed_mps": 20.0,
+                "deceleration_mps2": 1.0,
+                "errors": {"delta_l_max_m": 400.0, "measurements": 3, "measurement_time_s": -10},
+            },
+            "measurement time",
+        ),
+        ({"speed_mps": 20.0, "deceleration_mps2": 1.0, "gradient_permille": 2000}, "gradient"),
+        ({"speed_mps": 20.0, "deceleration_mps2": 1.0, "errors": {"p_s": 0}}, "p_s"),
+        ({"speed_mps": 1e200, "deceleration_mps2": 1.0}, "speed"),
+        ({"speed_mps": 10.0, "deceleration_mps2": 0.1, "gradient_permille": -30}, "downhill"),
+    ):
+        answer = client.post(URL, json=body, headers=ADMIN)
+        assert answer.status_code == 422, (body, answer.text)
+        assert answer.headers["content-type"].startswith("application/problem+json")
+        assert named in answer.text, answer.text
+
+
+def test_readers_only(client: TestClient) -> None:
+    assert client.post(URL, json={"speed_mps": 1, "deceleration_mps2": 1}).status_code == 401
