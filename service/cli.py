@@ -53,13 +53,16 @@ def _migrate(_: argparse.Namespace) -> int:
 
 
 def _user_add(args: argparse.Namespace) -> int:
-    from service.setup.credentials import add_user
+    from service.setup.credentials import add_user, find_person
 
     with get_sessionmaker().begin() as session:
-        _, token = add_user(
+        back = find_person(session, args.name) is not None  # revoked, else add_user refuses
+        user, token = add_user(
             session, args.name, args.role, actor="cli", expires_in_days=args.expires_in_days
         )
-    print(f"user {args.name} ({args.role}) created. Token (shown once, store it now):")
+        name = user.name
+    done = "added again (had been revoked)" if back else "created"
+    print(f"user {name} ({args.role}) {done}. Token (shown once, store it now):")
     print(token)
     return 0
 

@@ -98,10 +98,11 @@ def test_user_add_refuses_names_the_api_refuses(
     """Found by the independent trial: the CLI stored names that the API answers 422 to."""
     assert main(["migrate"]) == 0
     capsys.readouterr()
-    for bad in ("olena petrenko", "x" * 33, "ölena"):
+    for bad in ("olena\tpetrenko", "x" * 65, "Олeна"):  # a tab; too long; a Latin 'e' inside
         assert main(["user", "add", bad, "--role", "dispatcher"]) == 2, bad
         err = capsys.readouterr().err
         assert err.startswith("depot: ") and "name" in err and "letters" in err, err
+        assert "\t" not in err and len(err.strip().splitlines()) == 1, err
     assert main(["device", "key", "bad id!"]) == 2
     assert "device id" in capsys.readouterr().err
     assert main(["user", "list"]) == 0
