@@ -96,7 +96,9 @@ echo "image checked: user 10001, no compiler, no pip, depot --help" >&2
 [ -n "${DEPOT_DATABASE_URL:-}" ] || exit 0
 run -e "DEPOT_DATABASE_URL=$DEPOT_DATABASE_URL" "$c" -- depot migrate >&2
 port=${DEPOT_CHECK_PORT:-18000}
-run -e "DEPOT_DATABASE_URL=$DEPOT_DATABASE_URL" "$c" -- \
+# buildah itself in the background (not a function's subshell), so that killing it stops
+# the server inside.
+$b run --isolation chroot -e "DEPOT_DATABASE_URL=$DEPOT_DATABASE_URL" "$c" -- \
     depot serve --host 127.0.0.1 --port "$port" --workers 1 >/dev/null 2>&1 &
 server=$!
 python3 - "$port" <<'EOF'

@@ -40,7 +40,13 @@ def _free_port() -> int:
 
 
 def test_the_dockerfile_builds_an_image_that_runs_non_root_without_compiler_or_pip() -> None:
-    env = {**os.environ, "DEPOT_CHECK_PORT": str(_free_port())}
+    # Its own containers store (a store made with another driver cannot be opened with this one);
+    # kept between runs, so a second run reuses the base and the dependency layer.
+    env = {
+        "DEPOT_BUILD_ROOT": "/var/tmp/depot-image-test",
+        **os.environ,
+        "DEPOT_CHECK_PORT": str(_free_port()),
+    }
     if POSTGRES_URL:  # then migrate and serve against it too
         env["DEPOT_DATABASE_URL"] = POSTGRES_URL
     done = subprocess.run(
