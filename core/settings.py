@@ -11,6 +11,8 @@ from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 from pydantic import Field, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from core.settings_secrets import GENERATE, secret_problem
+
 DEVELOPMENT_ADMIN_TOKEN = "dev-admin-token"
 
 
@@ -101,10 +103,15 @@ class Settings(BaseSettings):
     def _refuse_unsafe_production(self) -> Settings:
         if self.environment != "production":
             return self
-        if self.admin_token == DEVELOPMENT_ADMIN_TOKEN or len(self.admin_token) < 24:
-            raise ValueError(
-                "DEPOT_ADMIN_TOKEN must be set to a secret of at least 24 characters in production"
-            )
+        if self.admin_token == DEVELOPMENT_ADMIN_TOKEN:
+            raise ValueError(f"DEPOT_ADMIN_TOKEN must be set to a secret in production; {GENERATE}")
+        for setting, secret in (
+            ("DEPOT_ADMIN_TOKEN", self.admin_token),
+            ("DEPOT_METRICS_TOKEN", self.metrics_token),
+        ):
+            problem = None if secret is None else secret_problem(setting, secret)
+            if problem is not None:
+                raise ValueError(problem)
         if not (self.database_url or "").startswith("postgresql"):
             # SQLite is for one station's trial; any other engine is not supported at all.
             raise ValueError(

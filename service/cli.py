@@ -17,7 +17,11 @@ from core.database import get_sessionmaker, utcnow
 from core.errors import DepotError
 from core.settings import get_settings
 from service import commands
-from service.commands._common import DepotParser, fail
+from service.commands._common import DepotParser, fail, number
+
+PORT = number(int, low=1, high=65535)
+WORKERS = number(int, low=1, high=64)
+LIFETIME = number(low=0, high=3650, low_open=True)  # days, as the API's expires_in_days
 
 
 def _serve(args: argparse.Namespace) -> int:
@@ -53,13 +57,16 @@ def _migrate(_: argparse.Namespace) -> int:
 
 
 def _user_add(args: argparse.Namespace) -> int:
-    from service.setup.credentials import add_user
+    from service.setup.credentials import add_user, find_person
 
     with get_sessionmaker().begin() as session:
-        _, token = add_user(
+        back = find_person(session, args.name) is not None  # revoked, else add_user refuses
+        user, token = add_user(
             session, args.name, args.role, actor="cli", expires_in_days=args.expires_in_days
         )
-    print(f"user {args.name} ({args.role}) created. Token (shown once, store it now):")
+        name = user.name
+    done = "added again (had been revoked)" if back else "created"
+    print(f"user {name} ({args.role}) {done}. Token (shown once, store it now):")
     print(token)
     return 0
 
@@ -154,8 +161,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     serve = sub.add_parser("serve", help="serve the HTTP API and the review screen")
     serve.add_argument("--host", help="address to listen on (default: DEPOT_HOST, 127.0.0.1)")
-    serve.add_argument("--port", type=int, help="TCP port to listen on (default: DEPOT_PORT, 8000)")
-    serve.add_argument("--workers", type=int, default=1, help="worker processes")
+    serve.add_argument(
+        "--port", type=PORT, help="TCP port to listen on (default: DEPOT_PORT, 8000)"
+    )
+    serve.add_argument("--workers", type=WORKERS, default=1, help="worker processes (1 to 64)")
     serve.add_argument("--migrate", action="store_true", help="migrate the database first")
     serve.set_defaults(func=_serve)
     sub.add_parser(
@@ -165,13 +174,17 @@ def build_parser() -> argparse.ArgumentParser:
         dest="user_command", metavar="ACTION"
     )
     add = user.add_parser("add", help="add a person; prints their token once")
-    add.add_argument("name", help="the person's name: letters, digits, '_', '.', '-' (≤ 32)")
+    add.add_argument(
+        "name",
+        help="what the person is called, any alphabet (Олена Коваль): letters, digits, single"
+        " spaces, '-', '.', '_', apostrophes (≤ 64)",
+    )
     add.add_argument(
         "--role", required=True, choices=("dispatcher", "engineer"), help="what they may do"
     )
     add.add_argument(
         "--expires-in-days",
-        type=float,
+        type=LIFETIME,
         default=None,
         help="token lifetime, days (default: no expiry)",
     )
@@ -183,7 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
     rotate.add_argument("name", help="the person whose token is replaced")
     rotate.add_argument(
         "--expires-in-days",
-        type=float,
+        type=LIFETIME,
         default=None,
         help="new token lifetime, days (default: the old token's expiry)",
     )

@@ -9,6 +9,20 @@ import argparse
 import re
 from typing import Any
 
+from service.commands._common import (
+    COUNT,
+    FINITE,
+    NON_NEGATIVE,
+    POSITIVE,
+    PROBABILITY,
+    SEED,
+    number,
+)
+
+# Monte Carlo runs: a million takes minutes on a 2-core host; more is a typing slip.
+MAX_RUNS = 1_000_000
+RUNS = number(int, low=1, high=MAX_RUNS)
+
 # argparse takes "-1e6" (or "-inf") for an option and says "expected one argument";
 # these parsers have no option that looks like a number, so any number is a value.
 # (``--gradient=-1e6`` works with any parser.)
@@ -28,52 +42,54 @@ def add_braking_parsers(sub: Any) -> dict[str, argparse.ArgumentParser]:
     bs = b.add_subparsers(dest="braking_command", required=True)
 
     t = bs.add_parser("trials", help="trials needed for p_max at confidence β (eq. 8)")
-    t.add_argument("--p-max", type=float, required=True, help="largest allowed probability")
-    t.add_argument("--beta", type=float, required=True, help="confidence β, 0 to 1")
+    t.add_argument("--p-max", type=PROBABILITY, required=True, help="largest allowed probability")
+    t.add_argument("--beta", type=PROBABILITY, required=True, help="confidence β, 0 to 1")
     t.add_argument("--json", action="store_true", help="print JSON instead of text")
 
     x = bs.add_parser(
         "exceedance", help="exceedance of the smallest of k measurements over channels"
     )
     x.add_argument(
-        "--p-max", type=float, required=True, help="probability that one measurement exceeds"
+        "--p-max", type=PROBABILITY, required=True, help="probability that one measurement exceeds"
     )
-    x.add_argument("-k", type=int, required=True, help="measurements per channel")
-    x.add_argument("--channels", type=int, default=1, help="independent channels")
+    x.add_argument("-k", type=COUNT, required=True, help="measurements per channel")
+    x.add_argument("--channels", type=COUNT, default=1, help="independent channels")
     x.add_argument("--json", action="store_true", help="print JSON instead of text")
 
     pl = bs.add_parser("plan", help="protective section and braking start point (eq. 6–7)")
     sp = pl.add_mutually_exclusive_group(required=True)
-    sp.add_argument("--speed", type=float, help="speed, m/s (or --speed-kmh)")
-    sp.add_argument("--speed-kmh", type=float, help="speed, km/h (or --speed)")
-    pl.add_argument("--decel", type=float, required=True, help="braking deceleration, m/s²")
-    pl.add_argument("--reaction-time", type=float, default=0.0, help="reaction time, s")
+    sp.add_argument("--speed", type=POSITIVE, help="speed, m/s (or --speed-kmh)")
+    sp.add_argument("--speed-kmh", type=POSITIVE, help="speed, km/h (or --speed)")
+    pl.add_argument("--decel", type=POSITIVE, required=True, help="braking deceleration, m/s²")
+    pl.add_argument("--reaction-time", type=NON_NEGATIVE, default=0.0, help="reaction time, s")
     pl.add_argument(
         "--gradient",
-        type=float,
+        type=FINITE,
         default=0.0,
         help="gradient, ‰, positive uphill, negative downhill (e.g. --gradient -8), within ±70",
     )
     pl.add_argument(
-        "--delta-s-max", type=float, default=3.0, help="largest negative braking error, m"
+        "--delta-s-max", type=NON_NEGATIVE, default=3.0, help="largest negative braking error, m"
     )
     pl.add_argument(
-        "--p-s", type=float, default=1e-2, help="probability of exceeding --delta-s-max"
+        "--p-s", type=PROBABILITY, default=1e-2, help="probability of exceeding --delta-s-max"
     )
     pl.add_argument(
-        "--delta-l-max", type=float, default=0.0, help="largest positive range error, m"
+        "--delta-l-max", type=NON_NEGATIVE, default=0.0, help="largest positive range error, m"
     )
     pl.add_argument(
-        "--p-l", type=float, default=1e-2, help="probability of exceeding --delta-l-max"
+        "--p-l", type=PROBABILITY, default=1e-2, help="probability of exceeding --delta-l-max"
     )
     pl.add_argument(
-        "-k", type=int, default=1, help="measurements per channel (the smallest is used)"
+        "-k", type=COUNT, default=1, help="measurements per channel (the smallest is used)"
     )
-    pl.add_argument("--channels", type=int, default=1, help="independent channels")
-    pl.add_argument("--measurement-time", type=float, default=0.0, help="time per measurement, s")
+    pl.add_argument("--channels", type=COUNT, default=1, help="independent channels")
+    pl.add_argument(
+        "--measurement-time", type=NON_NEGATIVE, default=0.0, help="time per measurement, s"
+    )
     pl.add_argument(
         "--obstacle-at",
-        type=float,
+        type=FINITE,
         default=None,
         help="obstacle track coordinate, m (default: none, no braking start point)",
     )
@@ -82,7 +98,7 @@ def add_braking_parsers(sub: Any) -> dict[str, argparse.ArgumentParser]:
     m = bs.add_parser(
         "montecarlo", help="Monte Carlo of the braking-distance error (±10 %% speed error)"
     )
-    m.add_argument("--runs", type=int, default=230, help="simulated brakings")
+    m.add_argument("--runs", type=RUNS, default=230, help="simulated brakings")
     m.add_argument(
         "--control",
         choices=["deceleration", "speed"],
@@ -90,12 +106,14 @@ def add_braking_parsers(sub: Any) -> dict[str, argparse.ArgumentParser]:
         help="what the brake controller holds",
     )
     ms = m.add_mutually_exclusive_group()
-    ms.add_argument("--speed", type=float, default=16.7, help="initial speed, m/s")
+    ms.add_argument("--speed", type=POSITIVE, default=16.7, help="initial speed, m/s")
     ms.add_argument(
-        "--speed-kmh", type=float, default=None, help="initial speed, km/h (default: --speed)"
+        "--speed-kmh", type=POSITIVE, default=None, help="initial speed, km/h (default: --speed)"
     )
-    m.add_argument("--beta", type=float, default=0.9, help="confidence β of the reported bound")
-    m.add_argument("--seed", type=int, default=0, help="random seed")
+    m.add_argument(
+        "--beta", type=PROBABILITY, default=0.9, help="confidence β of the reported bound"
+    )
+    m.add_argument("--seed", type=SEED, default=0, help="random seed")
     m.add_argument(
         "--png", default=None, metavar="FILE", help="write the histogram here (default: none)"
     )

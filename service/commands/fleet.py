@@ -10,7 +10,7 @@ from typing import Any, TextIO
 
 from core.database import get_sessionmaker
 from core.errors import DepotError
-from service.commands._common import fail
+from service.commands._common import COUNT, fail
 from service.fleet.schemas import WEIGHTS_METHODS
 
 
@@ -76,13 +76,6 @@ def _forecast(args: argparse.Namespace) -> int:
     return 0
 
 
-def _positive(text: str) -> Any:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text} is not a positive integer")
-    return value
-
-
 def register(subparsers: Any) -> None:
     imp = subparsers.add_parser(
         "import-measurements",
@@ -99,6 +92,6 @@ def register(subparsers: Any) -> None:
     fc.add_argument(
         "--method", choices=WEIGHTS_METHODS, default="prediction", help="quality-index weights"
     )
-    fc.add_argument("--horizon", type=_positive, default=30, help="forecast steps (tests)")
-    fc.add_argument("--order", type=_positive, default=2, help="AR order of the index")
+    fc.add_argument("--horizon", type=COUNT, default=30, help="forecast steps (tests)")
+    fc.add_argument("--order", type=COUNT, default=2, help="AR order of the index")
     fc.set_defaults(func=_forecast)

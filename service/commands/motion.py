@@ -39,7 +39,7 @@ from typing import Any
 
 from motion import braking, optical
 from service.commands._braking_parsers import add_braking_parsers
-from service.commands._common import DepotParser, fail
+from service.commands._common import COUNT, POSITIVE, DepotParser, fail
 from service.commands._motion_reports import render_histogram_png, tables
 
 __all__ = ["build_parser", "main", "register", "render_histogram_png"]
@@ -286,20 +286,20 @@ def register(sub: Any) -> None:
     )
     p.add_argument("image", metavar="IMAGE", help="the frame: JPEG or PNG, rows read top to bottom")
     p.add_argument(
-        "--distance", type=float, required=True, metavar="M", help="distance to the stripes, m"
+        "--distance", type=POSITIVE, required=True, metavar="M", help="distance to the stripes, m"
     )
     p.add_argument(
-        "--pixel-fov", type=float, required=True, metavar="RAD", help="angle of one pixel β, rad"
+        "--pixel-fov", type=POSITIVE, required=True, metavar="RAD", help="angle of one pixel β, rad"
     )
     p.add_argument(
-        "--row-time", type=float, required=True, metavar="S", help="row read-out time t_c, s"
+        "--row-time", type=POSITIVE, required=True, metavar="S", help="row read-out time t_c, s"
     )
     p.add_argument(
-        "--rows", type=int, default=None, metavar="N", help="rows h (default: the stripe height)"
+        "--rows", type=COUNT, default=None, metavar="N", help="rows h (default: the stripe height)"
     )
     p.add_argument(
         "--pixel-error",
-        type=float,
+        type=POSITIVE,
         default=None,
         metavar="RAD",
         help="pixel discreteness Δω, rad (default: β/2)",

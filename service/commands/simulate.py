@@ -29,7 +29,7 @@ from core.settings import get_settings
 
 if TYPE_CHECKING:
     from service.inprocess import TestClient
-from service.commands._common import fail
+from service.commands._common import NON_NEGATIVE, POSITIVE, SEED, fail
 from service.demo import END_KINDS, FLEET, SECTIONS, STATIONS, DemoLine, Trip
 
 __all__ = ["register"]
@@ -287,36 +287,36 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     )
     p.add_argument(
         "--train-every",
-        type=float,
+        type=POSITIVE,
         default=Schedule.train_every_s,
         metavar="S",
         help="seconds between trains sent into a free section",
     )
     p.add_argument(
         "--transit",
-        type=float,
+        type=POSITIVE,
         default=Schedule.transit_s,
         metavar="S",
         help="seconds from departure to arrival",
     )
     p.add_argument(
         "--heartbeat-every",
-        type=float,
+        type=POSITIVE,
         default=Schedule.heartbeat_every_s,
         metavar="S",
         help="seconds between each device's heartbeats",
     )
     p.add_argument(
         "--duration",
-        type=float,
+        type=POSITIVE,
         default=None,
         metavar="S",
         help="stop after S seconds (default: run until stopped)",
     )
     p.add_argument(
-        "--wait", type=float, default=30.0, metavar="S", help="wait S seconds for the server"
+        "--wait", type=NON_NEGATIVE, default=30.0, metavar="S", help="wait S seconds for the server"
     )
     p.add_argument(
-        "--seed", type=int, default=None, help="outcomes repeatable with a seed (default: random)"
+        "--seed", type=SEED, default=None, help="outcomes repeatable with a seed (default: random)"
     )
     p.set_defaults(func=_simulate)

@@ -15,7 +15,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from service.commands._common import fail
+from service.commands._common import SEED, fail, number
 from tail_check import DEFAULT_PROFILE, CameraProfile, calibrate, detect, load_profile
 from tail_check.study import StudyResult, StudySample, epsilon_curves
 from tail_check.synth import write_study_set
@@ -152,19 +152,30 @@ def _tail_study(args: argparse.Namespace) -> int:
     return 0
 
 
+# tail-synth's bounds: a 4096x4096 scene is 48 MiB per working image (100000x100000 asked for
+# 112 GiB); more than this many images is a typing slip rather than a study set.
+MAX_SYNTH_SIDE = 4096
+MAX_SYNTH_COUNT = 100_000
+SYNTH_COUNT = number(int, low=1, high=MAX_SYNTH_COUNT)
+KERNEL = number(low=0, high=1, low_open=True)  # a fraction of sqrt(W*H)
+
+
 def _parse_size(text: str) -> tuple[int, int] | None:
-    """``WIDTHxHEIGHT`` as two positive integers, or None when it is not that."""
+    """``WIDTHxHEIGHT`` as two integers from 1 to MAX_SYNTH_SIDE, or None when it is not."""
     match = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", text)
     if match is None:
         return None
     w, h = int(match.group(1)), int(match.group(2))
-    return (w, h) if w > 0 and h > 0 else None
+    return (w, h) if 0 < w <= MAX_SYNTH_SIDE and 0 < h <= MAX_SYNTH_SIDE else None
 
 
 def _tail_synth(args: argparse.Namespace) -> int:
     size = _parse_size(args.size)
     if size is None:
-        return fail(f"--size {args.size!r} is not WIDTHxHEIGHT in pixels; e.g. --size 640x480")
+        return fail(
+            f"--size {args.size!r} is not WIDTHxHEIGHT in pixels from 1x1 to"
+            f" {MAX_SYNTH_SIDE}x{MAX_SYNTH_SIDE}; e.g. --size 640x480"
+        )
     out = Path(args.directory)
     if out.exists() and not out.is_dir():
         return fail(f"{out} is not a folder; give a folder for the snapshots")
@@ -232,7 +243,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     p.add_argument("--plot", help="PNG plot path (default DIR/epsilon.png)")
     p.add_argument(
         "--kernel",
-        type=float,
+        type=KERNEL,
         default=0.02,
         help="filter size as a fraction of sqrt(W*H) (default 0.02)",
     )
@@ -240,9 +251,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
 
     p = subparsers.add_parser("tail-synth", help="write generated labelled snapshots")
     p.add_argument("directory", metavar="DIR", help="an empty (or new) folder for the images")
-    p.add_argument("--count", type=int, default=100, help="labelled images to write")
-    p.add_argument("--seed", type=int, default=0, help="random seed of the scenes")
-    p.add_argument("--size", default="640x480", help="WIDTHxHEIGHT in pixels (default 640x480)")
+    p.add_argument("--count", type=SYNTH_COUNT, default=100, help="labelled images to write")
+    p.add_argument("--seed", type=SEED, default=0, help="random seed of the scenes")
+    p.add_argument(
+        "--size",
+        default="640x480",
+        help=f"WIDTHxHEIGHT in pixels, at most {MAX_SYNTH_SIDE}x{MAX_SYNTH_SIDE} (default 640x480)",
+    )
     p.add_argument(
         "--force", action="store_true", help="write into a folder that already holds files"
     )

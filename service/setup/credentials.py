@@ -9,6 +9,7 @@ stated bound. There is no grace period: the old key stops with the rotation.
 
 from __future__ import annotations
 
+import unicodedata
 from datetime import datetime, timedelta
 
 from sqlalchemy import select
@@ -19,7 +20,7 @@ from core.database import utcnow
 from core.errors import Conflict, NotFound, Unprocessable
 from core.models import ROLES, CredentialChange, Device, User
 from core.schemas import format_instant
-from service.setup.names import DEVICE_ID, USER_NAME
+from service.setup.names import DEVICE_ID, PERSON_NAME
 
 
 def record_change(
@@ -33,7 +34,7 @@ def record_change(
 
 
 def _person(session: Session, name: str) -> User:
-    user = session.scalar(select(User).where(User.name == name))
+    user = session.scalar(select(User).where(User.name == unicodedata.normalize("NFC", name)))
     if user is None:
         raise NotFound(f"user {name!r} does not exist; `depot user list` shows who does")
     return user
@@ -50,15 +51,31 @@ def _expiry(days: float | None) -> datetime | None:
 def add_user(
     session: Session, name: str, role: str, *, actor: str, expires_in_days: float | None = None
 ) -> tuple[User, str]:
-    """A new person with a role; returns the row and the token (shown once)."""
-    USER_NAME.check(name)  # the API's rule, for the CLI too
+    """A new person with a role; returns the row and the token (shown once).
+
+    A revoked person's name is taken again by the same row: a person who left and came back
+    gets a fresh token and role (their old token stays dead), and the audit says they were
+    added again. An active person is not added twice: their token is rotated instead.
+    """
+    name = PERSON_NAME.normalise(name)  # the API's rule, for the CLI too
     if role not in ROLES:
         raise Unprocessable(f"role must be one of {', '.join(ROLES)}")
-    existing = session.scalar(select(User).where(User.name == name))
-    if existing is not None:
-        hint = "rotate their token" if existing.revoked_at is None else "choose another name"
-        raise Conflict(f"user {name!r} already exists; {hint} (depot user rotate {name})")
+    existing = find_person(session, name)
+    if existing is not None and existing.revoked_at is None:
+        raise Conflict(
+            f"user {existing.name!r} already exists; rotate their token"
+            f" (depot user rotate {existing.name!r})"
+        )
     token = new_secret()
+    if existing is not None:  # revoked: the person comes back
+        revoked_at = existing.revoked_at
+        assert revoked_at is not None
+        existing.name, existing.role, existing.token_hash = name, role, hash_secret(token)
+        existing.expires_at, existing.revoked_at = _expiry(expires_in_days), None
+        detail = f"role {role}; had been revoked at {format_instant(revoked_at)}"
+        record_change(session, actor, "user_readded", "user", name, detail)
+        session.flush()
+        return existing, token
     user = User(
         name=name, role=role, token_hash=hash_secret(token), expires_at=_expiry(expires_in_days)
     )
@@ -66,6 +83,16 @@ def add_user(
     record_change(session, actor, "user_added", "user", name, f"role {role}")
     session.flush()
     return user, token
+
+
+def find_person(session: Session, name: str) -> User | None:
+    """The person called ``name`` up to case (ЙОСИП is Йосип): one name, one person."""
+    name = unicodedata.normalize("NFC", name)
+    exact = session.scalar(select(User).where(User.name == name))
+    if exact is not None:
+        return exact
+    folded = name.casefold()
+    return next((u for u in session.scalars(select(User)) if u.name.casefold() == folded), None)
 
 
 def list_users(session: Session) -> list[User]:
@@ -78,7 +105,10 @@ def rotate_user(
     """A new token for ``name`` (a lost one is replaced); the old one stops at once."""
     user = _person(session, name)
     if user.revoked_at is not None:
-        raise Conflict(f"user {name!r} was revoked; add them again under another name")
+        raise Conflict(
+            f"user {user.name!r} was revoked; to bring them back, add them again"
+            f" (depot user add {user.name!r} --role ROLE): a fresh token, audited"
+        )
     token = new_secret()
     user.token_hash = hash_secret(token)
     if expires_in_days is not None:  # else the new token keeps the old one's expiry
@@ -132,7 +162,9 @@ def decommission_device(session: Session, device_id: str, *, actor: str) -> Devi
     """The device's events are refused (401) from now on; its history stays."""
     device = _device(session, device_id)
     device.decommissioned_at = utcnow()
-    device.key_hash = hash_secret(new_secret())
+    # The key's hash stays: a device still sending with it is found and told it is
+    # decommissioned (401 on HTTP, MQTT and NATS alike) rather than that its key is unknown.
+    # Every path refuses a decommissioned device's key, and no key is ever issued twice.
     record_change(session, actor, "device_decommissioned", "device", device_id)
     session.flush()
     device_cache().invalidate(device_id)  # this worker at once; the others within the TTL

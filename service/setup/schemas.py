@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validator
 
 from core.models import DEVICE_KINDS
 from core.schemas import Instant, StrictModel
-from service.setup.names import DEVICE_ID, IDENTIFIER, NAME_PATTERN
+from service.setup.names import DEVICE_ID, IDENTIFIER, NAME_PATTERN, PERSON_NAME, person_name
 
 # One rule (names.py) for the API and for the services the CLI calls.
 Identifier = Annotated[
@@ -16,6 +16,16 @@ Identifier = Annotated[
 ]
 DeviceIdentifier = Annotated[
     str, Field(min_length=1, max_length=DEVICE_ID.max_length, pattern=NAME_PATTERN)
+]
+# A person's name: any alphabet, stored in NFC (names.PersonNameRule).
+PersonName = Annotated[
+    str,
+    AfterValidator(person_name),
+    Field(
+        description="what the person is called (Олена Коваль, Petro-Ivanenko): letters of any"
+        " alphabet, digits, single spaces, '-', '.', '_' or apostrophes; stored in NFC",
+        json_schema_extra={"minLength": 1, "maxLength": PERSON_NAME.max_length},
+    ),
 ]
 DeviceKind = Literal[DEVICE_KINDS]  # type: ignore[valid-type]
 
@@ -98,7 +108,7 @@ class SectionCreated(BaseModel):
 
 
 class UserIn(StrictModel):
-    name: Identifier
+    name: PersonName
     role: Literal["dispatcher", "engineer"]
     expires_in_days: Annotated[float, Field(gt=0, le=3650)] | None = Field(
         default=None, description="the token stops working after this many days (none: never)"

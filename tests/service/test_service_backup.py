@@ -130,3 +130,20 @@ def test_a_backup_whose_checksums_leave_a_part_out_is_refused(
     )
     assert refused.returncode == 2 and "does not list images.tar" in refused.stderr
     assert not (tmp_path / "restored").exists()
+
+
+def test_a_backup_is_readable_by_its_owner_only(source: dict[str, str], tmp_path: Path) -> None:
+    """The dump holds every person's token hash and every device's key hash: it was written
+    0644 under a 0755 folder (found by the independent trial). Files 0600, folders 0700,
+    whatever the caller's umask."""
+    made = subprocess.run(
+        ["sh", "-c", 'umask 022; exec "$0" "$1"', DEPLOY / "backup.sh", tmp_path / "backups"],
+        env=source, capture_output=True, text=True,
+    )  # fmt: skip
+    assert made.returncode == 0, made.stderr
+    backup = Path(made.stdout.strip())
+    for folder in (tmp_path / "backups", backup):
+        assert folder.stat().st_mode & 0o777 == 0o700, (folder, oct(folder.stat().st_mode))
+    for part in ("database.dump", "images.tar", "SHA256SUMS"):
+        mode = (backup / part).stat().st_mode & 0o777
+        assert mode == 0o600, (part, oct(mode))

@@ -11,7 +11,11 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-SECRETS = {"DEPOT_ADMIN_TOKEN": "a" * 32, "DEPOT_DB_PASSWORD": "b" * 16, "PATH": "/usr/bin:/bin"}
+SECRETS = {
+    "DEPOT_ADMIN_TOKEN": "h7Qm2-vXc9LpT4wZ_rB6nYk3sJd8FgA1",
+    "DEPOT_DB_PASSWORD": "b" * 16,
+    "PATH": "/usr/bin:/bin",
+}
 
 
 def _stages() -> list[list[str]]:

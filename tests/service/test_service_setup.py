@@ -80,6 +80,9 @@ def test_user_tokens_stored_hashed(session: Session) -> None:
     assert user is not None and user.role == "engineer" and user.token_hash == hash_secret(token)
 
 
+STRONG = "h7Qm2-vXc9LpT4wZ_rB6nYk3sJd8FgA1"  # a generated-looking token (weak ones are refused)
+
+
 def test_production_refuses_unsafe_defaults() -> None:
     import pytest
     from pydantic import ValidationError
@@ -89,13 +92,13 @@ def test_production_refuses_unsafe_defaults() -> None:
     with pytest.raises(ValidationError, match="DEPOT_ADMIN_TOKEN"):
         Settings(environment="production", admin_token="dev-admin-token")
     with pytest.raises(ValidationError, match="PostgreSQL"):
-        Settings(environment="production", admin_token="x" * 32)
+        Settings(environment="production", admin_token=STRONG)
     # found by the second trial: MySQL started and answered 500 on every request
     for other in ("mysql://u:p@127.0.0.1/x", "sqlite:///depot.db"):
         with pytest.raises(ValidationError, match="PostgreSQL"):
-            Settings(environment="production", admin_token="x" * 32, database_url=other)
+            Settings(environment="production", admin_token=STRONG, database_url=other)
     safe = Settings(
-        environment="production", admin_token="x" * 32, database_url="postgresql+psycopg://db/depot"
+        environment="production", admin_token=STRONG, database_url="postgresql+psycopg://db/depot"
     )
     assert safe.resolved_database_url.startswith("postgresql")
 
