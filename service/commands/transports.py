@@ -10,7 +10,11 @@ from typing import Any
 
 from core.database import get_sessionmaker
 from core.settings import get_settings
-from service.commands._common import fail
+from service.commands._common import fail, number
+
+# Bridge processes on one shared subscription: each is one broker connection and one
+# database connection; past a few per core they only contend.
+BRIDGE_WORKERS = number(int, low=1, high=32)
 
 
 def _logging() -> None:
@@ -79,9 +83,9 @@ def register(sub: Any) -> None:
     mqtt.add_argument("--broker", help="mqtt://HOST:PORT (default: DEPOT_MQTT_URL)")
     mqtt.add_argument(
         "--workers",
-        type=int,
+        type=BRIDGE_WORKERS,
         default=1,
-        help="bridge processes sharing the subscription, client ids CLIENT_ID-1..N (default 1)",
+        help="bridge processes sharing the subscription, client ids CLIENT_ID-1..N, 1 to 32 (default 1)",
     )
     mqtt.set_defaults(func=_mqtt)
     consume = sub.add_parser(
