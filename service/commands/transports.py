@@ -85,7 +85,7 @@ def register(sub: Any) -> None:
         "--workers",
         type=BRIDGE_WORKERS,
         default=1,
-        help="bridge processes sharing the subscription, client ids CLIENT_ID-1..N, 1 to 32 (default 1)",
+        help="bridge processes on the shared subscription, client ids ID-1..N, 1 to 32 (default 1)",
     )
     mqtt.set_defaults(func=_mqtt)
     consume = sub.add_parser(
