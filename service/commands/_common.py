@@ -46,7 +46,8 @@ class DepotParser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
 
     def error(self, message: str) -> NoReturn:
-        self.print_usage(sys.stderr)
+        # One line, as every other refusal: the usage is one `--help` away, and it named
+        # nothing the message does not.
         command = self.prog.removeprefix("depot").strip()
         where = f"{command}: " if command else ""
         self.exit(2, f"depot: {where}{message} (see `{self.prog} --help`)\n")

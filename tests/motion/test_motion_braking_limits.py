@@ -104,7 +104,11 @@ def test_plan_cli_refuses_in_one_line(
     base = ["braking", "plan", "--speed", "20", "--decel", "1", "--json"]
     rc, out, err = _cli(capsys, *base, *argv)
     assert rc == 2 and out == ""
-    assert err.count("\n") == 1 and err.startswith("depot: ") and named in err, err
+    # Refused by the option's own range (naming the option) or by the calculation (naming the
+    # quantity): either way one line.
+    option = argv[0].split("=")[0]
+    assert err.count("\n") == 1 and err.startswith("depot: "), err
+    assert named in err or option in err, err
 
 
 @pytest.mark.parametrize("speed", ["nan", "inf", "1e200", "-5"])
@@ -117,7 +121,7 @@ def test_plan_and_montecarlo_cli_refuse_the_speed(
     ):
         rc, out, err = _cli(capsys, *argv)
         assert rc == 2 and out == "", (argv, out)
-        assert err.count("\n") == 1 and err.startswith("depot: speed"), err
+        assert err.count("\n") == 1 and err.startswith("depot: ") and "speed" in err, err
 
 
 def test_a_valid_plan_still_meets_sil4(capsys: pytest.CaptureFixture[str]) -> None:
