@@ -20,6 +20,7 @@ DECIDERS = ("engineer", "admin")
 ACTION_WORDS = {"keep_in_service": "kept in service", "withdraw_now": "withdrawn now"}
 ADVICE_WORDS = {
     "plan_withdrawal": "plan withdrawal",
+    "inspect": "a person must look",
     "watch": "watch",
     "serviceable": "serviceable",
     "unknown": "not enough history",

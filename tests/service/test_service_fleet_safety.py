@@ -80,13 +80,14 @@ SEVERITY = ["serviceable", "watch", "inspect", "plan_withdrawal"]
 def test_a_parameter_forecast_out_of_its_band_is_never_serviceable(
     fleet: dict, client: TestClient
 ) -> None:
-    """C1: expected plan_withdrawal — its fill time is forecast out of 2.5…3.5 s."""
+    """C1: expected at least watch — its fill time is forecast out of 2.5…3.5 s (one parameter
+    only: the spec's failure needs K = 2 of them, so not plan_withdrawal on that alone)."""
     body = _forecast(client, "C1")
     exit_p = body["parameter_exit_probability"]["brake_cylinder_fill_s"]
     assert exit_p >= 0.5, body["parameter_exit_probability"]
-    assert body["recommendation"] == "plan_withdrawal", (body["recommendation"], body["risk"])
-    # the risk says what the recommendation says, never less than the parameter forecast
-    assert body["risk"] >= exit_p
+    assert body["recommendation"] in ("watch", "plan_withdrawal"), body["recommendation"]
+    # the reported evidence says what the recommendation rests on
+    assert body["parameter_risk"] == exit_p
     assert any("brake_cylinder_fill_s" in r and "tolerance" in r for r in body["reasons"])
     assert any("most severe" in r for r in body["reasons"]), body["reasons"]
     assert body["index_risk"] is not None  # the index verdict is kept beside it
@@ -97,13 +98,15 @@ def test_every_parameter_drifting_ranks_first(fleet: dict, client: TestClient) -
     body = _forecast(client, "K5")
     assert body["recommendation"] == "plan_withdrawal"
     assert body["k_of_l_probability"] >= 0.5 and body["risk"] >= body["k_of_l_probability"]
-    top = [c["car"] for c in fleet["highest_risk"]]
-    assert top[:2] in (["K5", "C1"], ["C1", "K5"]), fleet["highest_risk"]
+    assert fleet["highest_risk"][0]["car"] == "K5", fleet["highest_risk"]
     ranked = client.get("/api/v1/maintenance/fleet", headers=ADMIN).json()["cars"]
     order = [c["car"] for c in ranked]
-    assert set(order[:2]) == {"K5", "C1"}, [(c["car"], c["recommendation"]) for c in ranked]
+    assert order[0] == "K5", [(c["car"], c["recommendation"]) for c in ranked]
+    assert order.index("C1") < min(order.index(c) for c in STABLE)
     # ranking consistent with the recommendation: never a less severe car above a more severe
-    levels = [SEVERITY.index(c["recommendation"]) for c in ranked if c["recommendation"] in SEVERITY]
+    levels = [
+        SEVERITY.index(c["recommendation"]) for c in ranked if c["recommendation"] in SEVERITY
+    ]
     assert levels == sorted(levels, reverse=True), [(c["car"], c["recommendation"]) for c in ranked]
 
 
@@ -129,7 +132,9 @@ def test_a_stuck_sensor_needs_a_person(fleet: dict, client: TestClient) -> None:
         f"no variation in {TESTS} tests" in r and "sensor may be stuck" in r
         for r in body["reasons"]
     ), body["reasons"]
-    ranked = [c["car"] for c in client.get("/api/v1/maintenance/fleet", headers=ADMIN).json()["cars"]]
+    ranked = [
+        c["car"] for c in client.get("/api/v1/maintenance/fleet", headers=ADMIN).json()["cars"]
+    ]
     assert ranked.index("S1") < min(ranked.index(c) for c in STABLE)
 
 
