@@ -151,3 +151,39 @@ def test_default_plausible_range_of_a_duration_is_never_negative() -> None:
     # the engineer's own range wins
     set_range = Parameter(name="x_s", nominal=3.0, tolerance=0.5, unit="s", plausible_lower=1.0)
     assert plausible_range(set_range)[0] == 1.0
+
+
+def test_a_long_history_is_bounded_in_the_answer_and_the_chart(
+    client: TestClient, session: Session
+) -> None:
+    """A car with 1.34 M tests returned all of them (73 MB in 92 s): the stored forecast keeps
+    the latest HISTORY.stored points, the answer the latest ``limit`` (default, maximum)."""
+    from service.fleet.chart import decimated
+    from service.fleet.views import HISTORY
+
+    n = HISTORY.stored + 300
+    for name, (nominal, tolerance, _) in PARAMETERS.items():
+        body = {"name": name, "nominal": nominal, "tolerance": tolerance, "unit": "s"}
+        post_ok(client, "/api/v1/maintenance/parameters", body)
+    post_ok(client, "/api/v1/cars", {"id": "L1"})
+    rng = np.random.default_rng(3)
+    for i in range(n):
+        at = END - timedelta(hours=n - 1 - i)
+        values = {k: float(nom + rng.normal(0, sd)) for k, (nom, _, sd) in PARAMETERS.items()}
+        record_measurements(session, "L1", at, values, source="api")
+    assert client.post("/api/v1/maintenance/forecasts", headers=ADMIN).status_code == 201
+    body = _forecast(client, "L1")
+    assert body["n_measurements"] == n
+    assert len(body["index_history"]) == HISTORY.default
+    assert body["index_history"][-1]["at"].startswith("2026-11-23T06:00")
+    assert body["index_history_total"] == n and body["index_history_stored"] == HISTORY.stored
+    most = client.get(f"/api/v1/cars/L1/forecast?limit={HISTORY.maximum}", headers=ADMIN)
+    assert len(most.json()["index_history"]) == HISTORY.maximum
+    too_many = client.get(f"/api/v1/cars/L1/forecast?limit={HISTORY.maximum + 1}", headers=ADMIN)
+    assert too_many.status_code == 422
+    assert client.get("/api/v1/cars/L1/forecast.png", headers=ADMIN).status_code == 200
+    # the chart draws at most HISTORY.chart points, keeping every bucket's extremes
+    y = np.sin(np.arange(100_000) / 50.0)
+    y[54_321] = 9.0  # one excursion must survive the downsampling
+    idx = decimated(y.shape[0], y, HISTORY.chart)
+    assert len(idx) <= HISTORY.chart and 54_321 in idx and idx[-1] == 99_999
