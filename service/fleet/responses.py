@@ -159,7 +159,13 @@ class ForecastOut(CarSummary):
     horizon: int | None
     failure_k: int | None
     index_band: Any
-    index_history: list[IndexPoint]
+    index_history: list[IndexPoint] = Field(
+        description="the latest index points, oldest first (at most the query's limit)"
+    )
+    index_history_total: int = Field(0, description="the car's tests (the forecast used all)")
+    index_history_stored: int = Field(
+        0, description="index points the stored forecast keeps (the largest limit that helps)"
+    )
     forecast: IndexForecast | None
     parameter_exit_probability: dict[str, Any]
     bands: dict[str, BandOut]

@@ -11,6 +11,9 @@ from sqlalchemy.orm import Session
 from service.fleet import verdict
 from service.fleet.models import Forecast, MaintenanceOverride
 from service.fleet.service import latest_overrides, overrides_of
+from service.fleet.vectorised import HISTORY
+
+__all__ = ["HISTORY"]
 
 
 def out_now(forecast: Forecast) -> bool:
@@ -112,9 +115,13 @@ def summary_out(forecast: Forecast, override: MaintenanceOverride | None) -> dic
     }
 
 
-def forecast_out(session: Session, forecast: Forecast) -> dict[str, Any]:
-    """The car's latest forecast in full, with its overrides (newest first)."""
+def forecast_out(
+    session: Session, forecast: Forecast, limit: int = HISTORY.default
+) -> dict[str, Any]:
+    """The car's latest forecast, its latest ``limit`` index points, its overrides (newest
+    first)."""
     p = forecast.payload
+    times, index = p.get("times", [])[-limit:], p.get("index", [])[-limit:]
     records = overrides_of(session, forecast.car_id)
     at = _clock(p)
     units = p.get("units", {})
@@ -127,10 +134,9 @@ def forecast_out(session: Session, forecast: Forecast) -> dict[str, Any]:
         "failure_k": p.get("failure_k"),
         "index_band": p.get("index_band"),
         # Without enough history the index is empty while the test times are listed.
-        "index_history": [
-            {"at": at(t), "index": y}
-            for t, y in zip(p.get("times", []), p.get("index", []), strict=False)
-        ],
+        "index_history": [{"at": at(t), "index": y} for t, y in zip(times, index, strict=False)],
+        "index_history_total": p.get("n_measurements", 0),
+        "index_history_stored": len(p.get("index") or p.get("times") or []),
         "forecast": _index_forecast(p),
         "parameter_exit_probability": p.get("parameter_exit_probability", {}),
         "bands": {

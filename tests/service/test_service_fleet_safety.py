@@ -187,3 +187,30 @@ def test_a_long_history_is_bounded_in_the_answer_and_the_chart(
     y[54_321] = 9.0  # one excursion must survive the downsampling
     idx = decimated(y.shape[0], y, HISTORY.chart)
     assert len(idx) <= HISTORY.chart and 54_321 in idx and idx[-1] == 99_999
+
+
+def test_readme_documents_the_forecast_rules_from_their_dataclasses() -> None:
+    """K of K-of-L (2), the uncalibrated band (0, 2) and "60 tests / 3 cars" were undocumented;
+    each is one field of one dataclass and the README's maintenance section names its value."""
+    from pathlib import Path
+
+    from maintenance.bands import INDICATOR_BAND
+    from service.fleet.calibration import CALIBRATION
+    from service.fleet.forecasts import ForecastOptions
+    from service.fleet.verdict import RULES
+
+    readme = (Path(__file__).parents[2] / "README.md").read_text(encoding="utf-8")
+    section = readme.split("## Maintenance forecasts", 1)[1].split("\n## ", 1)[0]
+    lo, hi = INDICATOR_BAND
+    for words in (
+        f"K = {ForecastOptions().failure_k}",
+        f"({lo:g}, {hi:g})",
+        f"{CALIBRATION.sample_tests} tests",
+        f"{CALIBRATION.min_cars} cars",
+        f"{CALIBRATION.sample_cars} cars",
+        f"{RULES.withdraw_risk:.0%}",
+        f"{RULES.watch_risk:.0%}",
+        f"{RULES.stuck_min_tests} tests",
+        "inspect",
+    ):
+        assert words in section, words
