@@ -50,11 +50,29 @@ TOO_SPARSE = "no parameter with a tolerance band was measured at half of the car
 
 @dataclass(frozen=True)
 class ForecastOptions:
+    """How the fleet job forecasts (README "Maintenance forecasts").
+
+    Attributes
+    ----------
+    method : str
+        Weights: ``prediction`` (4.16), ``inverse_variance``, ``rayleigh``, ``equal``, ``fisher``.
+    horizon : int
+        Tests forecast ahead.
+    order : int
+        AR order of the index forecast.
+    failure_k : int
+        K of the spec's K-of-L failure criterion: at least K of the L predictive parameters out
+        of tolerance is a failure (``k_of_l_probability``; the calibration's faulty tests);
+        with fewer parameters than K, all of them.
+    false_alarm : float
+        The calibrated index band's type-I probability on serviceable tests.
+    """
+
     method: str = "prediction"
     horizon: int = 30
     order: int = 2
-    failure_k: int = 2  # the spec's criterion: K parameters out of tolerance make a failure
-    false_alarm: float = 0.01  # index band's type-I probability on serviceable tests
+    failure_k: int = 2
+    false_alarm: float = 0.01
 
 
 @dataclass

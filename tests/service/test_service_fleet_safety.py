@@ -208,8 +208,8 @@ def test_readme_documents_the_forecast_rules_from_their_dataclasses() -> None:
         f"{CALIBRATION.sample_tests} tests",
         f"{CALIBRATION.min_cars} cars",
         f"{CALIBRATION.sample_cars} cars",
-        f"{RULES.withdraw_risk:.0%}",
-        f"{RULES.watch_risk:.0%}",
+        f"{RULES.withdraw_risk:.0%}".replace("%", " %"),
+        f"{RULES.watch_risk:.0%}".replace("%", " %"),
         f"{RULES.stuck_min_tests} tests",
         "inspect",
     ):
