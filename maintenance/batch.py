@@ -17,24 +17,17 @@ from scipy.special import ndtr, ndtri
 
 from maintenance._checks import FloatArray, as_vector, check_band, check_positive_int
 from maintenance.bands import INDICATOR_BAND, parameter_bands, to_indicators
-from maintenance.batch_forecast import forecast_rows
+from maintenance.batch_forecast import forecast_rows, parameter_exit_rows
 from maintenance.calibration import quality_index
 from maintenance.fleet import CarAssessment, assess_car, assessment_reasons
 from maintenance.forecasting import TREND_DEGREE, Forecast, Trend, minimum_history
 
 
 def _parameter_exit_batch(ind: FloatArray, horizon: int) -> FloatArray:
-    """Per car and parameter, P(out of [0, 2] at the horizon) from each linear trend."""
-    n = ind.shape[1]
-    steps = np.arange(n, dtype=np.float64) - (n - 1)
-    design = np.column_stack([np.ones(n), steps])
-    solve = np.linalg.pinv(design)
-    coef = np.einsum("kt,ctm->ckm", solve, ind)
-    resid = ind - np.einsum("tk,ckm->ctm", design, coef)
-    sd = np.sqrt(np.maximum(resid.var(axis=1, ddof=2), 1e-12))
-    at = coef[:, 0] + coef[:, 1] * horizon
-    lo, hi = INDICATOR_BAND
-    return np.asarray(np.clip(ndtr((lo - at) / sd) + ndtr((at - hi) / sd), 0, 1))
+    """Per car and parameter, P(out of [0, 2] within the horizon): :func:`parameter_exit_rows`."""
+    n_cars, n_steps, n_params = ind.shape
+    rows = np.ascontiguousarray(ind.transpose(0, 2, 1)).reshape(n_cars * n_params, n_steps)
+    return parameter_exit_rows(rows, horizon).reshape(n_cars, n_params)
 
 
 def _at_least_k_batch(p: FloatArray, k: int) -> FloatArray:

@@ -7,9 +7,13 @@ calibration (:mod:`maintenance.calibration`); the same arithmetic as
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+from scipy.special import ndtr
 
 from maintenance._checks import FloatArray
+from maintenance.bands import INDICATOR_BAND
 from maintenance.forecasting import MIN_UNIT_ROOT_GAP, TREND_DEGREE, Trend
 
 
@@ -104,3 +108,59 @@ def forecast_rows(
         spread = np.einsum("ij,jk,ik->i", future, cov, future)
         var = var + (sigma2 / gap**2)[:, None] * spread[None, :]
     return base + path, np.sqrt(var), a, sigma2, slope
+
+
+@dataclass(frozen=True)
+class ParameterForecastRules:
+    """How each parameter's own forecast of leaving its tolerance band is made.
+
+    A straight line through 40 autocorrelated readings, extended 30 tests ahead, leaves the
+    band by chance for a noisy parameter far too often; so a parameter's trend is used only
+    when its slope is significant once the residuals' autocorrelation is allowed for, and the
+    parameter is otherwise forecast by its AR model around its recent level.
+
+    Attributes
+    ----------
+    trend_z : float
+        The slope must exceed this many standard errors (the OLS error inflated by
+        ``(1 + ρ)/(1 − ρ)`` for lag-one autocorrelation ρ of the residuals).
+    max_autocorrelation : float
+        ρ is capped here (a near-unit-root fit would make every slope insignificant).
+    order : int
+        AR order of each parameter's residual model.
+    """
+
+    trend_z: float = 3.0
+    max_autocorrelation: float = 0.95
+    order: int = 2
+
+
+PARAMETER_FORECAST = ParameterForecastRules()
+
+
+def parameter_exit_rows(
+    ind: FloatArray, horizon: int, rules: ParameterForecastRules = PARAMETER_FORECAST
+) -> FloatArray:
+    """Per row of indicator histories ``ind`` (n_series, n_steps): the probability of being
+    outside the indicator band ``[0, 2]`` at the worst of the next ``horizon`` steps."""
+    n = ind.shape[1]
+    steps = np.arange(n, dtype=np.float64) - (n - 1)
+    centred = steps - steps.mean()
+    sxx = float(centred @ centred)
+    slope = ind @ centred / sxx
+    resid = ind - ind.mean(axis=1, keepdims=True) - slope[:, None] * centred[None, :]
+    s2 = np.einsum("ij,ij->i", resid, resid) / max(n - 2, 1)
+    lag = np.einsum("ij,ij->i", resid[:, 1:], resid[:, :-1])
+    rho = np.clip(lag / np.maximum(s2 * max(n - 2, 1), 1e-300), 0.0, rules.max_autocorrelation)
+    se = np.sqrt(s2 / sxx * (1.0 + rho) / (1.0 - rho))
+    trended = (np.abs(slope) > rules.trend_z * se)[:, None]
+    order = min(rules.order, n - 3)
+    mean_t, std_t, *_ = forecast_rows(ind, order, horizon, "linear")
+    mean_n, std_n, *_ = forecast_rows(ind, order, horizon, "none")
+    mean = np.where(trended, mean_t, mean_n)
+    std = np.where(trended, std_t, std_n)
+    lo, hi = INDICATOR_BAND
+    outside = ((mean < lo) | (mean > hi)).astype(np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        prob = np.where(std > 0.0, ndtr((lo - mean) / std) + ndtr((mean - hi) / std), outside)
+    return np.asarray(np.clip(prob.max(axis=1), 0.0, 1.0))

@@ -13,10 +13,10 @@ from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
-from scipy.special import ndtr
 
 from maintenance._checks import FloatArray, as_vector, check_band, check_positive_int
 from maintenance.bands import INDICATOR_BAND, parameter_bands, to_indicators
+from maintenance.batch_forecast import parameter_exit_rows
 from maintenance.calibration import METHODS, method_weights, quality_index
 from maintenance.forecasting import Forecast, Trend, forecast, minimum_history
 from maintenance.tolerance import at_least_k_probability
@@ -58,8 +58,9 @@ class CarAssessment:
         Probability in [0, 1] of the index being out of its band within the
         horizon (see :class:`~maintenance.forecasting.Forecast`).
     parameter_exit_probability : ndarray, shape (n_params,)
-        Per parameter, probability of being out of tolerance at the horizon
-        (own linear trend and residual noise over the window).
+        Per parameter, probability of being out of tolerance at the worst step of the
+        horizon (its own trend, when significant, plus AR noise over the window; see
+        :class:`maintenance.batch_forecast.ParameterForecastRules`).
     k_of_l_probability : float or None
         Probability that at least ``k`` parameters are out at the horizon
         (independence assumed).
@@ -148,16 +149,8 @@ def _empty(
 
 
 def _parameter_exit(ind: FloatArray, horizon: int) -> FloatArray:
-    """Per-parameter P(out of [0, 2] at the horizon) from each one's linear trend."""
-    n = ind.shape[0]
-    steps = np.arange(n, dtype=np.float64) - (n - 1)
-    design = np.column_stack([np.ones(n), steps])
-    coef, *_ = np.linalg.lstsq(design, ind, rcond=None)
-    resid = ind - design @ coef
-    sd = np.sqrt(np.maximum(resid.var(axis=0, ddof=2), 1e-12))
-    at = coef[0] + coef[1] * horizon
-    lo, hi = INDICATOR_BAND
-    return np.asarray(np.clip(ndtr((lo - at) / sd) + ndtr((at - hi) / sd), 0, 1))
+    """Per-parameter P(out of [0, 2] within the horizon): :func:`parameter_exit_rows`."""
+    return parameter_exit_rows(np.ascontiguousarray(ind.T), horizon)
 
 
 def assessment_reasons(

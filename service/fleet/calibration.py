@@ -19,11 +19,32 @@ from maintenance.bands import INDICATOR_BAND, to_indicators
 from maintenance.calibration import calibrate_fleet
 from service.fleet.history import Bands, CarHistory
 
-# The calibration sample: the last tests of up to this many cars (enough for the band's tails,
-# small enough to stay one quick pass over the start of the measurement stream).
-SAMPLE_CARS = 400
-SAMPLE_TESTS = 60
-MIN_CARS = 3
+
+@dataclass(frozen=True)
+class CalibrationRules:
+    """When the fleet's weights and index band are calibrated (README "Maintenance forecasts").
+
+    Attributes
+    ----------
+    sample_cars : int
+        The calibration sample: the first this many cars (in the stream's order) with
+        ``sample_tests`` tests — enough for the band's tails, one quick pass over the start of
+        the measurement stream.
+    sample_tests : int
+        A car takes part with its latest this many tests, and only when it has that many.
+    min_cars : int
+        Fewer cars with ``sample_tests`` tests leave the fleet uncalibrated: the index band is
+        the indicator band :data:`maintenance.bands.INDICATOR_BAND` ``(0, 2)`` (the weighted
+        deviation must reach a whole tolerance half-width) and the weights are fitted per car.
+    """
+
+    sample_cars: int = 400
+    sample_tests: int = 60
+    min_cars: int = 3
+
+
+CALIBRATION = CalibrationRules()
+SAMPLE_CARS = CALIBRATION.sample_cars  # the job's first read (kept for bench/)
 
 
 @dataclass(frozen=True)
@@ -43,7 +64,8 @@ class FleetIndex:
 def faulty_tests(history: CarHistory, bands: Bands, failure_k: int) -> np.ndarray:
     """Per test: at least ``failure_k`` parameters outside their tolerance band."""
     ind = to_indicators(history.values, bands.of(history.names))
-    return np.asarray(np.sum((ind < 0.0) | (ind > 2.0), axis=1) >= failure_k)
+    lo, hi = INDICATOR_BAND
+    return np.asarray(np.sum((ind < lo) | (ind > hi), axis=1) >= failure_k)
 
 
 def calibrate(
@@ -57,9 +79,10 @@ def calibrate(
 ) -> FleetIndex:
     """Fleet weights and index band from a sample of ``stream``, or why there are none."""
     sample = [h for h in _sample(stream)]
-    if len(sample) < MIN_CARS:
-        return FleetIndex((), None, INDICATOR_BAND, _uncalibrated(f"only {len(sample)} cars have "
-                          f"{SAMPLE_TESTS} tests or more (need {MIN_CARS})"))  # fmt: skip
+    rules = CALIBRATION
+    if len(sample) < rules.min_cars:
+        why = f"only {len(sample)} cars have {rules.sample_tests} tests or more"
+        return FleetIndex((), None, INDICATOR_BAND, _uncalibrated(f"{why} (need {rules.min_cars})"))
     common = set(sample[0].names).intersection(*(h.names for h in sample[1:]))
     names = tuple(n for n in sample[0].names if n in common)
     if not names:
@@ -67,9 +90,11 @@ def calibrate(
             (), None, INDICATOR_BAND, _uncalibrated("no parameter is measured on every car")
         )
     cols = [[h.names.index(n) for n in names] for h in sample]
-    data = np.stack([h.values[-SAMPLE_TESTS:][:, c] for h, c in zip(sample, cols, strict=True)])
+    last = rules.sample_tests
+    data = np.stack([h.values[-last:][:, c] for h, c in zip(sample, cols, strict=True)])
     ind = to_indicators(data, bands.of(names))  # every sampled car at once
-    labels = np.sum((ind < 0.0) | (ind > 2.0), axis=2) >= failure_k  # as faulty_tests
+    lo_i, hi_i = INDICATOR_BAND
+    labels = np.sum((ind < lo_i) | (ind > hi_i), axis=2) >= failure_k  # as faulty_tests
     try:
         cal = calibrate_fleet(
             data, band=bands.of(names), faulty=labels, method=method, order=order,
@@ -80,7 +105,7 @@ def calibrate(
     lo, hi = cal.index_band
     note = (
         f"fleet {method} weights and index band [{lo:.3f}, {hi:.3f}] from {len(sample)} cars' "
-        f"last {SAMPLE_TESTS} tests ({int(labels.sum())} faulty), false alarm {false_alarm:g}"
+        f"last {last} tests ({int(labels.sum())} faulty), false alarm {false_alarm:g}"
     )
     return FleetIndex(names, cal.weights, (lo, hi), note)
 
@@ -88,12 +113,13 @@ def calibrate(
 def _sample(stream: Iterable[CarHistory]) -> Iterable[CarHistory]:
     taken = 0
     for history in stream:
-        if len(history.taken_at) >= SAMPLE_TESTS and history.names:
+        if len(history) >= CALIBRATION.sample_tests and history.names:
             yield history
             taken += 1
-            if taken >= SAMPLE_CARS:
+            if taken >= CALIBRATION.sample_cars:
                 return
 
 
 def _uncalibrated(why: str) -> str:
-    return f"uncalibrated index band (0, 2) and per-car weights: {why}"
+    lo, hi = INDICATOR_BAND
+    return f"uncalibrated index band ({lo:g}, {hi:g}) and per-car weights: {why}"

@@ -16,6 +16,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.dates import AutoDateLocator, ConciseDateFormatter
 from matplotlib.figure import Figure
 
+from service.fleet.vectorised import HISTORY
+
 
 def _utc(at: str) -> np.datetime64:
     return np.datetime64(datetime.fromisoformat(at).astimezone(UTC).replace(tzinfo=None), "s")
@@ -26,6 +28,21 @@ def _times(points: list[dict[str, Any]]) -> NDArray[np.datetime64]:
     return np.array([_utc(p["at"]) for p in points], dtype="datetime64[s]")
 
 
+def decimated(n: int, values: NDArray[np.float64], most: int) -> list[int]:
+    """Indices (increasing) of at most ``most`` of ``n`` points: each of ``most // 2`` buckets
+    gives its lowest and highest value, and the last point is always kept."""
+    if n <= most:
+        return list(range(n))
+    buckets = max(1, (most - 1) // 2)
+    edges = np.linspace(0, n, buckets + 1).astype(np.int64)
+    keep = {n - 1}
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        if b > a:
+            chunk = values[a:b]
+            keep.update((a + int(np.nanargmin(chunk)), a + int(np.nanargmax(chunk))))
+    return sorted(keep)
+
+
 def render_chart(view: dict[str, Any], *, width_px: int = 760, height_px: int = 300) -> bytes:
     """PNG bytes of one car's forecast view (:func:`service.fleet.views.forecast_out`)."""
     # A Figure without pyplot keeps no global state, so requests can draw in parallel threads.
@@ -33,6 +50,9 @@ def render_chart(view: dict[str, Any], *, width_px: int = 760, height_px: int = 
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     history = [p for p in view.get("index_history", []) if p["at"] is not None]
+    if len(history) > HISTORY.chart:
+        y = np.array([np.nan if p["index"] is None else p["index"] for p in history], float)
+        history = [history[i] for i in decimated(len(history), y, HISTORY.chart)]
     steps = (view.get("forecast") or {}).get("steps", [])
     if history:
         ax.plot(_times(history), [p["index"] for p in history], color="#1565c0", lw=1.2,

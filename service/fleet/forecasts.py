@@ -36,10 +36,12 @@ from service.fleet.history import Bands, CarHistory, empty_history, histories, l
 from service.fleet.models import Forecast
 from service.fleet.pipeline import Writer, read_ahead
 from service.fleet.vectorised import Outcome, batch_assessments, payload_of
+from service.fleet.verdict import judge, rank_key
 
 log = logging.getLogger("depot.fleet")
 Progress = Callable[[int, int], None]
 _WRITE_CHUNK = 500
+TOP_CARS = 5  # cars a run names as its highest risk (the fleet view lists them all)
 _COMPUTE_CHUNK = 1000  # cars assessed together (vectorised per history length)
 _READ_AHEAD = 2 * _COMPUTE_CHUNK  # car histories the reader may hold ahead of the computation
 NO_HISTORY = "no measurements of parameters with a tolerance band"
@@ -48,11 +50,29 @@ TOO_SPARSE = "no parameter with a tolerance band was measured at half of the car
 
 @dataclass(frozen=True)
 class ForecastOptions:
+    """How the fleet job forecasts (README "Maintenance forecasts").
+
+    Attributes
+    ----------
+    method : str
+        Weights: ``prediction`` (4.16), ``inverse_variance``, ``rayleigh``, ``equal``, ``fisher``.
+    horizon : int
+        Tests forecast ahead.
+    order : int
+        AR order of the index forecast.
+    failure_k : int
+        K of the spec's K-of-L failure criterion: at least K of the L predictive parameters out
+        of tolerance is a failure (``k_of_l_probability``; the calibration's faulty tests);
+        with fewer parameters than K, all of them.
+    false_alarm : float
+        The calibrated index band's type-I probability on serviceable tests.
+    """
+
     method: str = "prediction"
     horizon: int = 30
     order: int = 2
-    failure_k: int = 2  # the spec's criterion: K parameters out of tolerance make a failure
-    false_alarm: float = 0.01  # index band's type-I probability on serviceable tests
+    failure_k: int = 2
+    false_alarm: float = 0.01
 
 
 @dataclass
@@ -162,6 +182,11 @@ def forecast_row(
 ) -> dict[str, Any]:
     """The Forecast row (as insert values) of one car (``outcome``: assessed already)."""
     status, risk, payload = outcome or _outcome(history, bands, fleet, options)
+    if status == "ok":
+        risk = judge(
+            payload, history.names, history.values, bands.of(history.names),
+            calibrated=fleet.calibrated, horizon=options.horizon, failure_k=options.failure_k,
+        )  # fmt: skip
     step = payload.get("first_exit")
     out_now = out_of_tolerance_now(history, bands)
     payload["out_of_tolerance_now"] = [name for name, _ in out_now]
@@ -275,7 +300,7 @@ def _assess_all(
     run = FleetRun(computed_at=at or utcnow(), calibration=fleet.note)
     pending: list[dict[str, Any]] = []
     seen: set[str] = set()
-    risks: list[tuple[str, float]] = []
+    ranked: list[tuple[tuple[Any, ...], str, float]] = []
 
     def emit(history: CarHistory, outcome: Outcome | None = None) -> None:
         nonlocal pending
@@ -284,7 +309,8 @@ def _assess_all(
         seen.add(history.car_id)
         run.statuses[row["status"]] = run.statuses.get(row["status"], 0) + 1
         if row["risk"] is not None:
-            risks.append((history.car_id, row["risk"]))
+            key = rank_key(row["status"], row["risk"], row["payload"])
+            ranked.append((key, history.car_id, row["risk"]))
         if len(pending) >= _WRITE_CHUNK:
             write(pending)
             pending = []  # the writer owns the submitted list
@@ -300,7 +326,8 @@ def _assess_all(
         emit(empty_history(car_id))
     write(pending)
     run.cars = len(seen)
-    run.top = sorted(risks, key=lambda item: -item[1])[:5]
+    # the fleet view's order: most severe recommendation first, then risk
+    run.top = [(car, risk) for _, car, risk in sorted(ranked)[:TOP_CARS]]
     return run
 
 

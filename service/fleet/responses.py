@@ -11,6 +11,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from core.schemas import Instant
+from service.fleet.schemas import PLAUSIBLE_LOWER, PLAUSIBLE_UPPER
 
 
 class Answer(BaseModel):
@@ -34,8 +35,12 @@ class ParameterOut(Answer):
     upper: float = Field(description="nominal + tolerance: the band's upper edge")
     unit: str
     description: str | None = None
-    plausible_lower: float = Field(description="values below this are refused")
-    plausible_upper: float = Field(description="values above this are refused")
+    plausible_lower: float = Field(
+        description=f"{PLAUSIBLE_LOWER} (the engineer's, else the default)"
+    )
+    plausible_upper: float = Field(
+        description=f"{PLAUSIBLE_UPPER} (the engineer's, else the default)"
+    )
 
 
 class CarRisk(Answer):
@@ -84,8 +89,15 @@ class CarSummary(Answer):
     forecast_id: int
     computed_at: Instant
     status: str
-    risk: float | None = Field(description="probability of leaving the band within the horizon")
-    recommendation: str = Field(description="plan_withdrawal, watch, serviceable or unknown")
+    risk: float | None = Field(
+        description="the car's failure risk within the horizon: the larger of the index risk"
+        " and the K-of-L probability (None: no usable forecast, or a parameter did not vary —"
+        " a person must look)"
+    )
+    recommendation: str = Field(
+        description="plan_withdrawal, inspect (a person must look), watch, serviceable or"
+        " unknown (not enough history); never less severe than the risk says"
+    )
     decision: str
     first_exit: ExitStep | None
     out_of_band_now: bool = Field(
@@ -96,6 +108,23 @@ class CarSummary(Answer):
         default_factory=list, description="parameters outside tolerance at the latest test"
     )
     k_of_l_probability: float | None = None
+    index_risk: float | None = Field(
+        None, description="probability of the index leaving its band within the horizon"
+    )
+    parameter_risk: float | None = Field(
+        None,
+        description="the largest probability of one parameter leaving its tolerance band within"
+        " the horizon; from 0.5 the car is at least watch",
+    )
+    probabilities_calibrated: bool | None = Field(
+        None,
+        description="false: the fleet index band was not calibrated; every probability is a"
+        " model estimate, shown clipped away from 0 and 1",
+    )
+    unvarying: list[str] = Field(
+        default_factory=list,
+        description="parameters with no variation over their latest tests (sensor may be stuck)",
+    )
     reasons: list[str]
     weights: dict[str, float]
     contributions: dict[str, float]
@@ -130,7 +159,13 @@ class ForecastOut(CarSummary):
     horizon: int | None
     failure_k: int | None
     index_band: Any
-    index_history: list[IndexPoint]
+    index_history: list[IndexPoint] = Field(
+        description="the latest index points, oldest first (at most the query's limit)"
+    )
+    index_history_total: int = Field(0, description="the car's tests (the forecast used all)")
+    index_history_stored: int = Field(
+        0, description="index points the stored forecast keeps (the largest limit that helps)"
+    )
     forecast: IndexForecast | None
     parameter_exit_probability: dict[str, Any]
     bands: dict[str, BandOut]

@@ -20,6 +20,7 @@ DECIDERS = ("engineer", "admin")
 ACTION_WORDS = {"keep_in_service": "kept in service", "withdraw_now": "withdrawn now"}
 ADVICE_WORDS = {
     "plan_withdrawal": "plan withdrawal",
+    "inspect": "a person must look",
     "watch": "watch",
     "serviceable": "serviceable",
     "unknown": "not enough history",
@@ -78,7 +79,7 @@ def fleet_chart(request: Request, session: DbSession, car_id: str) -> Response:
     if forecast is None:
         return Response(status_code=404)
     key = (forecast.id, forecast.car_id, forecast.computed_at.isoformat())
-    png = cached_chart(key, views.forecast_out(session, forecast))
+    png = cached_chart(key, views.forecast_out(session, forecast, views.HISTORY.maximum))
     return Response(png, media_type="image/png", headers={"Cache-Control": "private, max-age=60"})
 
 

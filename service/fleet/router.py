@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import APIRouter, Body
+from fastapi import APIRouter, Body, Query
 from fastapi.responses import Response
 
 from core.auth import CurrentEngineer, CurrentReader
@@ -24,6 +24,7 @@ from service.fleet.responses import (
 )
 from service.fleet.rules import plausible_range, refuse_ahead, refuse_implausible, registered
 from service.fleet.schemas import ForecastRunIn, MaintenanceDecisionIn, MeasurementIn, ParameterIn
+from service.fleet.vectorised import HISTORY
 from service.strict_json import StrictJSONRoute
 
 router = APIRouter(tags=["maintenance"], route_class=StrictJSONRoute)
@@ -114,16 +115,29 @@ def _latest(session: DbSession, car_id: str) -> Forecast:
     return forecast
 
 
+HistoryLimit = Annotated[
+    int,
+    Query(
+        ge=1,
+        le=HISTORY.maximum,
+        description=f"latest index points returned (default {HISTORY.default},"
+        f" at most {HISTORY.maximum}; a stored forecast keeps its latest {HISTORY.stored})",
+    ),
+]
+
+
 @router.get("/cars/{car_id}/forecast", response_model=ForecastOut)
-def get_forecast(car_id: str, session: DbSession, _: CurrentReader) -> dict[str, Any]:
-    return views.forecast_out(session, _latest(session, car_id))
+def get_forecast(
+    car_id: str, session: DbSession, _: CurrentReader, limit: HistoryLimit = HISTORY.default
+) -> dict[str, Any]:
+    return views.forecast_out(session, _latest(session, car_id), limit)
 
 
 @router.get("/cars/{car_id}/forecast.png", response_class=Response, responses=PNG)
 def get_forecast_chart(car_id: str, session: DbSession, _: CurrentReader) -> Response:
     forecast = _latest(session, car_id)
     key = (forecast.id, forecast.car_id, forecast.computed_at.isoformat())
-    png = cached_chart(key, views.forecast_out(session, forecast))
+    png = cached_chart(key, views.forecast_out(session, forecast, HISTORY.maximum))
     return Response(png, media_type="image/png", headers={"Cache-Control": "private, max-age=60"})
 
 

@@ -31,23 +31,31 @@ class MeasurementRules:
     plausible_tolerances : float
         Where the engineer set no plausible range, values farther than this many tolerances
         from the nominal value are refused (a car in the band's tail is 1–3 tolerances out).
+    non_negative_units : frozenset of str
+        Units of quantities that are never negative (durations, resistances): without the
+        engineer's ``plausible_lower`` the default range starts at 0, not below it.
     """
 
     plausible_tolerances: float = 10.0
+    non_negative_units: frozenset[str] = frozenset(
+        {"s", "ms", "min", "h", "Ohm", "ohm", "kOhm", "MOhm", "GOhm", "Ω", "kΩ", "MΩ", "GΩ"}
+    )
 
 
 RULES = MeasurementRules()
 
 
 def plausible_range(parameter: Parameter, rules: MeasurementRules = RULES) -> tuple[float, float]:
-    """``(lower, upper)`` a value of ``parameter`` must lie in (the engineer's, or the band's)."""
+    """``(lower, upper)`` a value of ``parameter`` must lie in: the engineer's, else nominal ±
+    ``plausible_tolerances`` tolerances, never below 0 for a non-negative unit (s, Ω)."""
     span = rules.plausible_tolerances * parameter.tolerance
     lower = parameter.plausible_lower
     upper = parameter.plausible_upper
-    return (
-        parameter.nominal - span if lower is None else lower,
-        parameter.nominal + span if upper is None else upper,
-    )
+    if lower is None:
+        lower = parameter.nominal - span
+        if parameter.unit in rules.non_negative_units:
+            lower = max(0.0, lower)
+    return (lower, parameter.nominal + span if upper is None else upper)
 
 
 def registered(session: Session) -> dict[str, Parameter]:

@@ -8,6 +8,7 @@ from pydantic import Field
 
 from core.schemas import StrictModel
 from ingest.schemas import DeviceTime, MeasuredValues
+from service.fleet.rules import RULES
 from service.reasons import Reason
 
 ParameterName = Annotated[
@@ -28,6 +29,15 @@ class MeasurementIn(StrictModel):
 MAX_MAGNITUDE = 1e15
 
 
+PLAUSIBLE_LOWER = (
+    f"values below are refused (default: nominal − {RULES.plausible_tolerances:g} tolerances,"
+    " never below 0 for a duration or resistance unit: s, ms, min, h, Ohm, Ω)"
+)
+PLAUSIBLE_UPPER = (
+    f"values above are refused (default: nominal + {RULES.plausible_tolerances:g} tolerances)"
+)
+
+
 class ParameterIn(StrictModel):
     """A measured parameter and its tolerance band ``nominal ± tolerance``."""
 
@@ -39,10 +49,10 @@ class ParameterIn(StrictModel):
     description: Annotated[str, Field(max_length=2000)] = ""
     plausible_lower: (
         Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None
-    ) = Field(default=None, description="values below are refused (default: the band's)")
+    ) = Field(default=None, description=PLAUSIBLE_LOWER)
     plausible_upper: (
         Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None
-    ) = Field(default=None, description="values above are refused (default: the band's)")
+    ) = Field(default=None, description=PLAUSIBLE_UPPER)
 
 
 class ForecastRunIn(StrictModel):

@@ -199,7 +199,7 @@ def check_plausible_range(data: ParameterIn) -> None:
     raise Unprocessable(
         f"the plausible range {lower:g}…{upper:g} of {data.name} is empty ({', '.join(given)});"
         " give plausible_lower below plausible_upper (an unset limit is nominal ±"
-        f" {RULES.plausible_tolerances:g} tolerances)",
+        f" {RULES.plausible_tolerances:g} tolerances, never below 0 for s or Ω)",
         errors=[{"loc": ["body", loc], "msg": "plausible_lower must be below plausible_upper"}],
     )
 

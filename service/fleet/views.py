@@ -8,14 +8,12 @@ from typing import Any
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
+from service.fleet import verdict
 from service.fleet.models import Forecast, MaintenanceOverride
 from service.fleet.service import latest_overrides, overrides_of
+from service.fleet.vectorised import HISTORY
 
-# Consequences of a forecast: at even odds of leaving the band within the horizon the car is
-# planned out of service (the package flags at the same risk); a one-in-ten chance asks for
-# attention at the next depot visit.
-WITHDRAW_RISK = 0.5
-WATCH_RISK = 0.1
+__all__ = ["HISTORY"]
 
 
 def out_now(forecast: Forecast) -> bool:
@@ -25,29 +23,15 @@ def out_now(forecast: Forecast) -> bool:
 
 
 def recommendation(forecast: Forecast) -> str:
-    """``plan_withdrawal``, ``watch``, ``serviceable`` or ``unknown`` (no usable forecast).
-
-    A car already out of its band is planned out whatever its forecast (safety: a person must
-    look), even when the forecast failed or the index band was not calibrated.
-    """
-    if out_now(forecast):
-        return "plan_withdrawal"
-    if forecast.status != "ok" or forecast.risk is None:
-        return "unknown"
-    if forecast.risk >= WITHDRAW_RISK or forecast.payload.get("first_exit") is not None:
-        return "plan_withdrawal"
-    return "watch" if forecast.risk >= WATCH_RISK else "serviceable"
+    """``plan_withdrawal``, ``inspect``, ``watch``, ``serviceable`` or ``unknown`` (no usable
+    forecast): :func:`service.fleet.verdict.recommend`."""
+    return verdict.recommend(forecast.status, forecast.risk, forecast.payload or {})
 
 
-def rank_key(forecast: Forecast) -> tuple[int, int, float, float]:
-    """Cars already out of their band first, whatever their risk; then as
-    :func:`maintenance.fleet.rank_fleet`: risk first, then earliest exit; unknown last."""
-    first = 0 if out_now(forecast) else 1
-    if forecast.status != "ok" or forecast.risk is None:
-        return (first, 1, 0.0, 0.0)
-    exit_step = forecast.payload.get("first_exit")
-    ahead = float(exit_step) if exit_step is not None else float("inf")
-    return (first, 0, -forecast.risk, ahead)
+def rank_key(forecast: Forecast) -> tuple[Any, ...]:
+    """:func:`service.fleet.verdict.rank_key`: out of band first, then the most severe
+    recommendation, then risk, then the earliest exit; unknown last."""
+    return verdict.rank_key(forecast.status, forecast.risk, forecast.payload or {})
 
 
 def latest_forecast(session: Session, car_id: str) -> Forecast | None:
@@ -120,6 +104,10 @@ def summary_out(forecast: Forecast, override: MaintenanceOverride | None) -> dic
         "out_of_band_now": out_now(forecast),
         "out_of_tolerance_now": list(p.get("out_of_tolerance_now") or []),
         "k_of_l_probability": p.get("k_of_l_probability"),
+        "index_risk": p.get("index_risk", forecast.risk),
+        "parameter_risk": verdict.parameter_risk(p) if forecast.status == "ok" else None,
+        "probabilities_calibrated": p.get("probabilities_calibrated"),
+        "unvarying": list(p.get("unvarying") or []),
         "reasons": p.get("reasons", []),
         "weights": p.get("weights", {}),
         "contributions": p.get("contributions", {}),
@@ -127,9 +115,13 @@ def summary_out(forecast: Forecast, override: MaintenanceOverride | None) -> dic
     }
 
 
-def forecast_out(session: Session, forecast: Forecast) -> dict[str, Any]:
-    """The car's latest forecast in full, with its overrides (newest first)."""
+def forecast_out(
+    session: Session, forecast: Forecast, limit: int = HISTORY.default
+) -> dict[str, Any]:
+    """The car's latest forecast, its latest ``limit`` index points, its overrides (newest
+    first)."""
     p = forecast.payload
+    times, index = p.get("times", [])[-limit:], p.get("index", [])[-limit:]
     records = overrides_of(session, forecast.car_id)
     at = _clock(p)
     units = p.get("units", {})
@@ -142,10 +134,9 @@ def forecast_out(session: Session, forecast: Forecast) -> dict[str, Any]:
         "failure_k": p.get("failure_k"),
         "index_band": p.get("index_band"),
         # Without enough history the index is empty while the test times are listed.
-        "index_history": [
-            {"at": at(t), "index": y}
-            for t, y in zip(p.get("times", []), p.get("index", []), strict=False)
-        ],
+        "index_history": [{"at": at(t), "index": y} for t, y in zip(times, index, strict=False)],
+        "index_history_total": p.get("n_measurements", 0),
+        "index_history_stored": len(p.get("index") or p.get("times") or []),
         "forecast": _index_forecast(p),
         "parameter_exit_probability": p.get("parameter_exit_probability", {}),
         "bands": {
