@@ -17,7 +17,7 @@ from ingest.rows import insert_many, raw_values, stored_many, write_answers
 from ingest.store import answer_now, answer_stored, derive_new, duplicate
 
 
-def _rejected(event_id: Any, exc: Unprocessable | Conflict | Forbidden) -> dict[str, Any]:
+def rejected(event_id: Any, exc: Unprocessable | Conflict | Forbidden) -> dict[str, Any]:
     error: dict[str, Any] = {"status": exc.status, "title": exc.title, "detail": exc.detail}
     if exc.errors:
         error["errors"] = exc.errors
@@ -28,7 +28,7 @@ def _rejected(event_id: Any, exc: Unprocessable | Conflict | Forbidden) -> dict[
     }
 
 
-def _validated(
+def validated(
     session: Session, device: Device, items: list[Any]
 ) -> tuple[list[dict[str, Any] | None], list[tuple[int, Any, dict[str, Any]]]]:
     """Validate every item; returns the per-item rejections and the accepted (index, event,
@@ -46,15 +46,13 @@ def _validated(
                 sections_ok.add(section)
             check_derivable(session, event)
         except (Unprocessable, Forbidden, Conflict) as exc:
-            results[index] = _rejected(
-                item.get("event_id") if isinstance(item, dict) else None, exc
-            )
+            results[index] = rejected(item.get("event_id") if isinstance(item, dict) else None, exc)
             continue
         accepted.append((index, event, item))
     return results, accepted
 
 
-def _stored_item(
+def stored_item(
     session: Session,
     device: Device,
     event: Any,
@@ -70,7 +68,7 @@ def _stored_item(
         else:
             _, result = answer_stored(device, event, body, found)
     except Conflict as exc:
-        return _rejected(event.event_id, exc)
+        return rejected(event.event_id, exc)
     return {"event_id": event.event_id, "status": "duplicate", "result": result}
 
 
@@ -90,7 +88,7 @@ def accept_batch(
 def _accept_batch(
     session: Session, device: Device, items: list[Any], transport: str
 ) -> list[dict[str, Any]]:
-    results, accepted = _validated(session, device, items)
+    results, accepted = validated(session, device, items)
     first: dict[str, tuple[int, Any, dict[str, Any]]] = {}
     repeats = []
     for entry in accepted:
@@ -112,7 +110,7 @@ def _accept_batch(
         raw_id = inserted.get((device.id, event.event_id))
         if raw_id is None:
             found = before.get((device.id, event.event_id))
-            results[index] = _stored_item(session, device, event, body, answers, found)
+            results[index] = stored_item(session, device, event, body, answers, found)
             continue
         values = rows[event.event_id]
         if values["result"]:
@@ -124,7 +122,7 @@ def _accept_batch(
             result = row["result"]
         results[index] = {"event_id": event.event_id, "status": "created", "result": result}
     for index, event, body in repeats:
-        results[index] = _stored_item(session, device, event, body, answers)
+        results[index] = stored_item(session, device, event, body, answers)
     write_answers(session, answers)
     return [r for r in results if r is not None]
 

@@ -21,14 +21,13 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
-from core.errors import Conflict, Forbidden, Unprocessable
 from core.models import Device
-from ingest.checks import check_device_may_send, check_section, parse_event
-from ingest.handlers import Derivation, check_derivable, derive
+from ingest.batch_store import stored_item, validated
+from ingest.handlers import Derivation, derive
 from ingest.holding import holding
 from ingest.liveness import touched_at_end
 from ingest.rows import as_raw, insert_many, raw_values, write_answers
-from ingest.store import answer_now, derive_new, duplicate
+from ingest.store import answer_now, derive_new
 
 Result = dict[str, Any]
 _Entry = tuple[int, int, Any, dict[str, Any]]  # (batch, item, validated event, body)
@@ -46,49 +45,16 @@ class DeviceBatch:
         return None if self.received_at is None else self.received_at[index]
 
 
-def _rejected(event_id: Any, exc: Unprocessable | Conflict | Forbidden) -> Result:
-    error: Result = {"status": exc.status, "title": exc.title, "detail": exc.detail}
-    if exc.errors:
-        error["errors"] = exc.errors
-    return {
-        "event_id": event_id if isinstance(event_id, str) else None,
-        "status": "rejected",
-        "error": error,
-    }
-
-
 def _validate(
     session: Session, b: int, batch: DeviceBatch, results: list[Result | None]
 ) -> list[_Entry]:
-    """The batch's accepted items; each refusal goes into ``results``. Nothing is written."""
-    accepted: list[_Entry] = []
-    sections_ok: set[str | None] = set()
-    for index, item in enumerate(batch.items):
-        try:
-            event = parse_event(item)
-            check_device_may_send(batch.device, event.kind)
-            section = getattr(event, "section", None)
-            if section not in sections_ok:
-                check_section(session, batch.device, section)
-                sections_ok.add(section)
-            check_derivable(session, event)
-        except (Unprocessable, Forbidden, Conflict) as exc:
-            results[index] = _rejected(
-                item.get("event_id") if isinstance(item, dict) else None, exc
-            )
-            continue
-        accepted.append((b, index, event, item))
-    return accepted
-
-
-def _stored_item(
-    session: Session, device: Device, event: Any, body: Result, answers: list[Any]
-) -> Result:
-    try:
-        _, result = duplicate(session, device, event, body, answers)
-    except Conflict as exc:
-        return _rejected(event.event_id, exc)
-    return {"event_id": event.event_id, "status": "duplicate", "result": result}
+    """The batch's accepted items, by :func:`ingest.batch_store.validated` (the same rules
+    item for item); each refusal goes into ``results``. Nothing is written."""
+    refusals, accepted = validated(session, batch.device, batch.items)
+    for index, refusal in enumerate(refusals):
+        if refusal is not None:
+            results[index] = refusal
+    return [(b, index, event, item) for index, event, item in accepted]
 
 
 def _row(batch: DeviceBatch, index: int, event: Any, body: Result, transport: str) -> Result:
@@ -135,7 +101,7 @@ def _accept_batches(
         device = batches[b].device
         raw_id = inserted.get(ident)
         if raw_id is None:
-            results[b][index] = _stored_item(session, device, event, body, answers)
+            results[b][index] = stored_item(session, device, event, body, answers)
             continue
         values = rows[ident]
         if values["result"]:
@@ -147,6 +113,6 @@ def _accept_batches(
             result = row["result"]
         results[b][index] = {"event_id": event.event_id, "status": "created", "result": result}
     for b, index, event, body in repeats:
-        results[b][index] = _stored_item(session, batches[b].device, event, body, answers)
+        results[b][index] = stored_item(session, batches[b].device, event, body, answers)
     write_answers(session, answers)
     return [[r for r in batch if r is not None] for batch in results]
