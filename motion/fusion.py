@@ -46,34 +46,26 @@ missed.
 
 Where each part lives
 ---------------------
-:mod:`motion.model` the Kalman algebra (prediction, scalar updates);
-:mod:`motion.buffer` the replay buffer of the last ``max_delay_s`` seconds;
-:mod:`motion.policy` which GNSS speeds and fixes are used;
-:mod:`motion.state` the JSON snapshot; :mod:`motion.samples` the inputs,
-outputs, tuning and the rules a sample must satisfy.  This module ties them
-together.
+:mod:`motion.model` the Kalman algebra; :mod:`motion.buffer` the replay
+buffer of the last ``max_delay_s`` seconds; :mod:`motion.policy` which GNSS
+speeds and fixes are used; :mod:`motion.direction` whether the sign of the
+speed is known (GNSS gives a magnitude); :mod:`motion.restart` on-board
+restarts (the clock starting again); :mod:`motion.state` the JSON snapshot;
+:mod:`motion.samples` the inputs, outputs, tuning and the sample rules.
 
 Feeding it from the service
 ---------------------------
-One :class:`TrackFilter` per train, sharing one :class:`MarkerTable`::
-
-    table = MarkerTable.from_dict(line_json)          # once
-    filt = filters.setdefault(train, TrackFilter(table, FilterConfig()))
-    state = filt.update(event)   # a motion_sample event body (a mapping)
-    state.position_m, state.speed_mps, state.sigma_position_m, state.section
-
-``update`` accepts a :class:`MotionSample` or any mapping with the keys of
-the ``motion_sample`` event: ``t`` (s, the on-board clock), ``accel_mps2``,
-optional ``gnss_speed_mps``, ``gnss_delay_s``, ``marker_id``, ``gnss_lat``,
-``gnss_lon``; other keys (``train``, ``event_id``, ...) are ignored.
-Invalid values raise :class:`~motion.samples.SampleRuleError`, a
-:class:`ValueError` (the API refuses such samples with 422 by the same rules,
-:data:`~motion.samples.SAMPLE_LIMITS`); a sample older than
-the buffer raises :class:`StaleSampleError` (a ``ValueError``).  Samples
-that arrive out of order but within the buffer are inserted and the filter
-re-run.  ``to_dict()``/``TrackFilter.from_dict(d, table)`` give a JSON-safe
-snapshot (a few kB: the buffer of the last ``max_delay_s`` seconds); the
-filter also pickles.
+One :class:`TrackFilter` per train, sharing one :class:`MarkerTable`
+(``MarkerTable.from_dict(line_json)``); ``filt.update(event)`` takes a
+:class:`MotionSample` or a ``motion_sample`` event body (``t`` on the on-board
+clock, ``accel_mps2``, optional ``gnss_speed_mps``, ``gnss_delay_s``,
+``marker_id``, ``gnss_lat``, ``gnss_lon``; other keys ignored) and returns a
+:class:`TrackState`.  Invalid values raise
+:class:`~motion.samples.SampleRuleError` (the API refuses them with 422 by the
+same rules); a sample older than the buffer raises :class:`StaleSampleError`
+(both ``ValueError``); out-of-order samples within the buffer are inserted
+and the filter re-run.  ``to_dict()``/``TrackFilter.from_dict(d, table)``
+give a JSON-safe snapshot of a few kB; the filter also pickles.
 """
 
 from __future__ import annotations
@@ -83,10 +75,12 @@ from collections.abc import Mapping
 from typing import Any
 
 from .buffer import ReplayBuffer
+from .direction import DirectionWatch
 from .gnss_delay import estimate_gnss_delay
 from .marker_reader import MarkerReader
 from .model import PER_MILLE, Estimate, G, KalmanModel, Measurement, MeasurementKind
 from .policy import GnssPolicy
+from .restart import RestartWatch
 from .samples import (
     FilterConfig,
     MotionSample,
@@ -134,6 +128,8 @@ class TrackFilter:
         "unknown_markers",
         "gnss_rejects",
         "_started_again",
+        "_restart",
+        "_direction",
     )
 
     def __init__(
@@ -152,6 +148,8 @@ class TrackFilter:
         self.unknown_markers = 0
         self.gnss_rejects = 0  # GNSS speeds rejected in a row by the gate
         self._started_again = False  # a gap beyond max_gap_s made everything unknown
+        self._restart = RestartWatch(c)  # an on-board restart: its clock starts again
+        self._direction = DirectionWatch(c)  # whether the sign of the speed is evidence
 
     # -- public API ----------------------------------------------------------
     @property
@@ -187,7 +185,7 @@ class TrackFilter:
         delay = cfg.gnss_delay_s if gnss_delay_s is None else gnss_delay_s
         check_sample(t, accel_mps2, gnss_speed_mps, delay, gnss_lat, gnss_lon)
         buf = self._buf
-        if self._post is not None and self._beyond_gap(t):
+        if self._post is not None and self._starts_again_at(t):
             self._start_again()
         post = self._post
         if post is not None and t > buf.entries[-1].t:
@@ -234,12 +232,16 @@ class TrackFilter:
             s0, ps = c.initial_position_m, c.initial_position_sigma**2
         return (s0, c.initial_speed_mps, 0.0, ps, 0.0, 0.0, speed_var, 0.0, bias_var)
 
-    def _beyond_gap(self, t: float) -> bool:
-        """Whether ``t`` lies more than ``max_gap_s`` after the newest sample:
-        nothing can be integrated across that.  (A sample older than the buffer
-        is refused instead, :class:`StaleSampleError`: a late old batch must not
-        wipe a good estimate.)"""
-        return t - self._buf.entries[-1].t > self.cfg.max_gap_s
+    def _starts_again_at(self, t: float) -> bool:
+        """Whether the sample at ``t`` starts the filter again: it lies more than
+        ``max_gap_s`` after the newest sample (nothing can be integrated across
+        that), or it confirms an on-board restart; :meth:`RestartWatch.check`
+        refuses an old sample that does not (a late old batch must not wipe a
+        good estimate)."""
+        entries = self._buf.entries
+        if t - entries[-1].t > self.cfg.max_gap_s:
+            return True
+        return self._restart.check(t, entries[0].t, entries[-1].t)
 
     def _start_again(self) -> None:
         """Forget the train's motion (not the counters): the next sample starts
@@ -251,6 +253,8 @@ class TrackFilter:
         self._policy = GnssPolicy(c)
         self.gnss_rejects = 0
         self._started_again = True
+        self._restart.clear()
+        self._direction.reset()
 
     def _marker_read(self, i: int, marker_id: str) -> None:
         mk = self.table.get(marker_id)
@@ -258,8 +262,17 @@ class TrackFilter:
             self.unknown_markers += 1
             return
         variance = self.cfg.marker_sigma**2
-        self._buf.add(i, Measurement(MeasurementKind.POSITION, mk.track_m, variance))
+        self._position(i, mk.track_m, variance)
         self._reader.read(mk.id)
+
+    def _position(self, i: int, z: float, variance: float) -> None:
+        """A position fix ``z`` at entry ``i``; mirrored first when it shows the
+        assumed sign of the speed wrong (:mod:`motion.direction`)."""
+        buf = self._buf
+        flip_at = self._direction.position_fix(buf.posterior(i), z, variance)
+        if flip_at is not None:
+            buf.add(i, Measurement(MeasurementKind.DIRECTION_FLIP, flip_at, 0.0))
+        buf.add(i, Measurement(MeasurementKind.POSITION, z, variance))
 
     def _gnss_speed(self, tau: float, speed: float) -> int | None:
         """Attach a GNSS speed measured at ``tau``; returns its entry (where to
@@ -285,6 +298,7 @@ class TrackFilter:
         assert e.measurements
         m = e.measurements[-1]
         x = self._model.update(e.prior, e.measurements[:-1])
+        self._direction.gnss_speed(x, m.value, m.variance)
         if not self._model.speed_rejected(x, m.value, m.variance):
             self.gnss_rejects = 0
             return
@@ -293,13 +307,15 @@ class TrackFilter:
             return
         self.gnss_rejects = 0
         e.measurements[-1] = Measurement(MeasurementKind.SPEED_RESTART, m.value, m.variance)
+        self._direction.lost()  # the speed starts again from a magnitude
         self._post = buf.replay(j)
 
     def _gnss_fix(self, tau: float, lat: float, lon: float) -> None:
         """Apply a GNSS geographic fix measured at ``tau`` if the policy wants it."""
         policy = self._policy
         assert self._post is not None
-        _, _, _, var, *_ = self._post
+        s_now, _, _, var, *_ = self._post
+        var += self._direction.spread(s_now)  # with the sign assumed, it may be either way
         if not policy.wants_fix(tau, var, self._reader.zone is not None):
             return
         buf = self._buf
@@ -312,8 +328,7 @@ class TrackFilter:
         s_fix, offset = self.table.project(lat, lon, near)
         if policy.fix_on_track(offset):
             policy.fix_used(tau)
-            variance = self.cfg.gnss_position_sigma**2
-            buf.add(j, Measurement(MeasurementKind.POSITION, s_fix, variance))
+            self._position(j, s_fix, self.cfg.gnss_position_sigma**2)
         self._post = buf.replay(j)  # (an entry may have been inserted at j)
 
     # -- outputs ---------------------------------------------------------------
@@ -321,20 +336,22 @@ class TrackFilter:
         cfg = self.cfg
         e = self._buf.entries[-1]
         assert self._post is not None
-        s, u, b, p00, _, _, p11, _, p22 = self._post
-        sig_s = math.sqrt(max(p00, 0.0))
+        s_in, u, b, p00, _, _, p11, _, p22 = self._post
+        # With the sign assumed: no direction, a magnitude, and both ways possible.
+        way = self._direction
+        s, sig_s = way.centre(s_in), math.sqrt(max(p00, 0.0) + way.spread(s_in))
         sig_u = math.sqrt(max(p11, 0.0))
         known = sig_s < cfg.lost_position_sigma
         thr = max(cfg.direction_sigmas * sig_u, cfg.standstill_mps)
-        d = 1 if u > thr else (-1 if u < -thr else 0)
+        d = 0 if way.assumed else (1 if u > thr else (-1 if u < -thr else 0))
         view = self._reader.update(s, sig_s, d, known)
         last_gnss_t = self._policy.last_gnss_t
         model = self._model
-        gi = G * self.table.gradient_at(s) / PER_MILLE if model.grad else 0.0
+        gi = G * self.table.gradient_at(s_in) / PER_MILLE if model.grad else 0.0
         return TrackState(
             t=e.t,
             position_m=s,
-            speed_mps=u,
+            speed_mps=abs(u) if way.assumed else u,
             acceleration_mps2=cfg.orientation * (e.accel - b) - gi,
             direction=d,
             sigma_position_m=sig_s,
@@ -367,6 +384,8 @@ class TrackFilter:
             stale_measurements=self.stale_measurements,
             unknown_markers=self.unknown_markers,
             gnss_rejects=self.gnss_rejects,
+            restart=self._restart.to_json(),
+            direction=self._direction.to_json(),
         ).to_json()
 
     @classmethod
@@ -383,6 +402,8 @@ class TrackFilter:
         f.stale_measurements = snap.stale_measurements
         f.unknown_markers = snap.unknown_markers
         f.gnss_rejects = snap.gnss_rejects
+        f._restart.restore(snap.restart)
+        f._direction.restore(snap.direction)
         if f._buf.entries:
             f._state = f._make_state()
         return f

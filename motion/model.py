@@ -65,11 +65,15 @@ class MeasurementKind(IntEnum):
     # |u| after a run of GNSS speeds the gate rejected: the estimate was wrong,
     # so speed and bias start again (position unknown) and this one is applied.
     SPEED_RESTART = 2
+    # The sign of the speed was assumed wrong (motion.direction): the state is
+    # mirrored about ``value``, the coordinate where the sign was assumed.
+    DIRECTION_FLIP = 3
 
 
 # (an enum member is looked up on its class at every use: ~0.2 µs in the update loop)
 _POSITION = int(MeasurementKind.POSITION)
 _RESTART = int(MeasurementKind.SPEED_RESTART)
+_FLIP = int(MeasurementKind.DIRECTION_FLIP)
 
 
 class Measurement(NamedTuple):
@@ -142,6 +146,9 @@ class KalmanModel:
         for kind, z, r in measurements:
             if kind == _RESTART:
                 x = self._restarted(x)
+            elif kind == _FLIP:
+                x = self._flipped(x, z)
+                continue
             s, u, b, p00, p01, p02, p11, p12, p22 = x
             if kind == _POSITION:
                 y = z - s
@@ -174,6 +181,13 @@ class KalmanModel:
         s, u, _, *_ = x
         ps, pu, pb = self.restart
         return (s, u, 0.0, ps, 0.0, 0.0, pu, 0.0, pb)
+
+    def _flipped(self, x: Estimate, anchor_m: float) -> Estimate:
+        """``x`` on the other way from ``anchor_m``: coordinate mirrored about it,
+        speed negated (covariance as ``T·P·T``, ``T = diag(-1, -1, 1)``); the bias,
+        learnt while the sign was wrong, starts again from its prior."""
+        s, u, _, p00, p01, _, p11, _, _ = x
+        return (2.0 * anchor_m - s, -u, 0.0, p00, p01, 0.0, p11, 0.0, self.restart[2])
 
     def speed_rejected(self, x: Estimate, z: float, r: float) -> bool:
         """Whether the gate in :meth:`update` rejects the speed ``z`` (variance ``r``) at ``x``."""

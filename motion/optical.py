@@ -12,11 +12,13 @@ Conventions
   1024 pixels ≈ 0.94 mrad).  ``pixel_error_rad`` is its Δω, the discreteness
   of an angle read off the sensor (half a pixel, 0.47 mrad).
 * The paper writes the smear angle as ``s·β``: a pixel column maps linearly
-  to an angle (an equiangular lens).  :func:`render_stripes` and
-  :func:`measure_smear` use the same model: column ``c`` looks at angle
-  ``(c - cx)·β`` from the optical axis, and a point at perpendicular
-  distance ``D`` seen at angle θ lies ``D·tan θ`` along the track from the
-  axis.
+  to an angle (an equiangular lens).  :func:`render_stripes` uses that model:
+  column ``c`` looks at angle ``(c - cx)·β`` from the optical axis, and a
+  point at perpendicular distance ``D`` seen at angle θ lies ``D·tan θ``
+  along the track from the axis.  :func:`measure_smear` fits the edges in
+  that model and in a rectilinear lens's (column ∝ tan θ, every edge shifted
+  alike in pixels) and keeps the one the frame follows; a frame that fails
+  the stripe gate in the paper's model is refused in both.
 * A CMOS rolling shutter exposes row ``r`` at ``r·t_c`` (``row_time_s``),
   so a vertical stripe passing at speed ``v`` is drawn slanted: its
   along-track position ``D·tan θ`` moves by ``v·t_c`` per row, and over

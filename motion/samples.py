@@ -149,7 +149,9 @@ class TrackState:
     position_m: float  # track coordinate
     speed_mps: float  # signed: positive towards increasing coordinate
     acceleration_mps2: float  # along increasing coordinate, bias and gradient removed
-    direction: int  # +1 increasing coordinate, -1 decreasing, 0 standstill
+    # +1 increasing coordinate, -1 decreasing, 0 standstill or not known (motion.direction:
+    # then speed_mps is a magnitude and the position is the midpoint of both ways)
+    direction: int
     sigma_position_m: float
     sigma_speed_mps: float
     sigma_acceleration_mps2: float
@@ -230,6 +232,12 @@ class FilterConfig:
     # further after the newest (the unit was off, or its clock jumped) starts the
     # filter again from that sample with position and speed unknown.
     max_gap_s: float = 30.0
+    # An on-board restart (motion.restart): this many samples in a row more than
+    # restart_jump_s behind the newest, running forward among themselves, start the
+    # filter again from the last of them (speed and position unknown).  Fewer are
+    # late samples and refused.
+    restart_jump_s: float = 30.0
+    restart_confirm_samples: int = 3
 
     def __post_init__(self) -> None:
         if self.orientation not in (1, -1):
@@ -244,6 +252,10 @@ class FilterConfig:
             raise ValueError("max_gap_s must be at least max_delay_s")
         if self.gnss_reject_limit < 1:
             raise ValueError("gnss_reject_limit must be at least 1")
+        if self.restart_jump_s < self.max_delay_s or self.restart_confirm_samples < 1:
+            raise ValueError(
+                "restart_jump_s must be at least max_delay_s, restart_confirm_samples at least 1"
+            )
 
 
 def _opt_float(d: Mapping[str, Any], key: str) -> float | None:

@@ -15,13 +15,21 @@ during an upgrade).  The document, a few kB::
      "reader": {<MarkerReader.to_dict()>},
      "last_fix_t": t | null, "last_gnss_t": t | null,
      "counters": [stale_measurements, unknown_markers],
-     "gnss_rejects": n}          # only when n > 0 (added after version 1)
+     "gnss_rejects": n,          # only when n > 0 (added after version 1)
+     "restart": [t, n],          # only during a run of far-behind samples (motion.restart)
+     "direction": {"assumed": b, "anchor": [s, var] | null,
+                   "last_fix": [s, var] | null}}  # only while not settled
 
 ``gnss_rejects`` counts the GNSS speeds rejected in a row by the gate; it is
 written only while non-zero, so a healthy filter keeps the version-1 form and
 an older worker (which ignores the key) still reads the document.  A buffer
 measurement of kind 2 (:attr:`~motion.model.MeasurementKind.SPEED_RESTART`)
-is written only after such a run of rejections.
+is written only after such a run of rejections, one of kind 3
+(``DIRECTION_FLIP``) only when a fix showed an assumed sign wrong; both leave
+the buffer within ``max_delay_s``.  An older worker ignores the keys
+``restart`` and ``direction`` (it then claims the assumed direction, as it
+always did) but would misread a kind-3 entry as a speed: a snapshot written
+during those seconds is for this release or a later one only.
 
 ``config`` holds every version-1 field, and a field added since only when it
 differs from its default (so default-tuned snapshots keep the version-1 form).
@@ -51,6 +59,8 @@ _ADDED_AFTER_V1 = frozenset(
         "gnss_reject_limit",
         "unknown_speed_sigma",
         "max_gap_s",
+        "restart_jump_s",
+        "restart_confirm_samples",
     }
 )
 _CONFIG_DEFAULTS = asdict(FilterConfig())
@@ -87,6 +97,8 @@ class Snapshot:
     stale_measurements: int = 0
     unknown_markers: int = 0
     gnss_rejects: int = 0
+    restart: list[Any] | None = None  # motion.restart.RestartWatch, during a run
+    direction: dict[str, Any] | None = None  # motion.direction.DirectionWatch, while assumed
 
     def to_json(self) -> dict[str, Any]:
         """The JSON-safe document (key order fixed: it is compared byte for byte)."""
@@ -103,6 +115,10 @@ class Snapshot:
         }
         if self.gnss_rejects:
             doc["gnss_rejects"] = self.gnss_rejects
+        if self.restart is not None:
+            doc["restart"] = self.restart
+        if self.direction is not None:
+            doc["direction"] = self.direction
         return doc
 
     @classmethod
@@ -128,4 +144,6 @@ class Snapshot:
             stale_measurements=stale,
             unknown_markers=unknown,
             gnss_rejects=int(d.get("gnss_rejects", 0)),
+            restart=d.get("restart"),
+            direction=d.get("direction"),
         )

@@ -1,5 +1,6 @@
 """``POST /motion/braking-plan``: the protective section and braking start point
-of seed 001 (eq. 6–7) for one train, as ``depot braking plan`` computes it.
+of seed 001 (eq. 6–7) for one train; ``depot braking plan`` answers through the
+same :func:`plan`.
 
 The ranges are the domain's (:data:`motion.braking.BRAKING_LIMITS`): a value
 outside them is answered 422 problem+json with the domain's message, the same
@@ -61,25 +62,15 @@ class BrakingPlanOut(BaseModel):
 
 
 def plan(body: BrakingPlanIn) -> BrakingPlanOut:
-    """The plan, or :class:`Unprocessable` with the domain's message."""
-    e = body.errors
+    """The plan, or :class:`Unprocessable` with the domain's message.
+
+    The one builder of the answer: the endpoint and ``depot braking plan``
+    (its text and ``--json``) both call it, so they answer alike.
+    """
     try:
-        errors = braking.ErrorModel(
-            delta_s_max_m=e.delta_s_max_m,
-            p_s=e.p_s,
-            delta_l_max_m=e.delta_l_max_m,
-            p_l=e.p_l,
-            measurements=e.measurements,
-            channels=e.channels,
-            measurement_time_s=e.measurement_time_s,
-        )
         result = braking.braking_plan(
-            body.speed_mps,
-            body.deceleration_mps2,
-            reaction_time_s=body.reaction_time_s,
-            gradient_permille=body.gradient_permille,
-            errors=errors,
-            obstacle_at_m=body.obstacle_at_m,
+            **body.model_dump(exclude={"errors"}),
+            errors=braking.ErrorModel(**body.errors.model_dump()),
         )
     except ValueError as exc:
         raise Unprocessable(str(exc)) from exc

@@ -10,7 +10,7 @@ from sqlalchemy.orm import Session
 
 from core.errors import Conflict, NotFound, Unprocessable
 from core.models import Section
-from motion.fusion import FilterConfig, Marker, MarkerTable, TrackFilter
+from motion.fusion import FilterConfig, Marker, MarkerTable, StaleSampleError, TrackFilter
 from service.trains.models import TrackMarker, TrainPosition
 from service.trains.schemas import MarkerIn
 
@@ -63,7 +63,14 @@ def feed(session: Session, train: str, sample: dict[str, Any], at: Any) -> dict[
         except ValueError:
             # The marker table changed since the filter started: start again from it.
             track_filter = TrackFilter(table, FilterConfig())
-    state = track_filter.update(sample).as_dict()
+    try:
+        state = track_filter.update(sample).as_dict()
+    except StaleSampleError:
+        # Refused, but counted towards an on-board restart (motion.restart): the
+        # count must reach the next sample, whichever worker takes it.
+        row.filter_state = track_filter.to_dict()
+        session.flush()
+        raise
     row.updated_at, row.state, row.filter_state = at, state, track_filter.to_dict()
     session.flush()
     return state

@@ -258,9 +258,10 @@ def test_unknown_start_found_by_first_marker() -> None:
 
 def test_direction_and_reversal() -> None:
     """Forward, stop, back: the GNSS speed is a magnitude; the direction
-    comes from the accelerometer."""
+    comes from the accelerometer, from a start known to be standing (with the
+    start unknown no direction is claimed: test_motion_fusion_restart)."""
     table = _straight_table()
-    f = TrackFilter(table, FilterConfig(initial_position_m=500.0))
+    f = TrackFilter(table, FilterConfig(initial_position_m=500.0, initial_speed_sigma=0.05))
     v = s = 0.0
     dirs = []
     for k in range(1, 1201):

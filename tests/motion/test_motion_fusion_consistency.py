@@ -128,6 +128,11 @@ def test_a_single_gnss_outlier_is_still_rejected() -> None:
     assert abs(st.speed_mps - 10.0) < 0.1 and math.isfinite(st.sigma_speed_mps)
 
 
+# A start known to run forwards at 15 m/s from coordinate 0: with the speed unknown
+# at the start the direction is not known either, nor the position (motion.direction).
+KNOWN_CRUISE = FilterConfig(initial_position_m=0.0, initial_speed_mps=15.0, initial_speed_sigma=0.5)
+
+
 def _cruise(f: TrackFilter, seconds: int) -> None:
     for t in range(seconds):
         f.step(float(t), 0.0, 15.0, 1.0)
@@ -135,7 +140,7 @@ def _cruise(f: TrackFilter, seconds: int) -> None:
 
 def test_a_time_jump_beyond_the_largest_gap_starts_again_unknown() -> None:
     """The trial: t = 1e9 after t ≈ 300 gave position −1.2e17 m, speed −2.4e8 m/s."""
-    f = TrackFilter(config=FilterConfig(initial_position_m=0.0))
+    f = TrackFilter(config=KNOWN_CRUISE)
     _cruise(f, 300)
     assert f.state is not None and f.state.position_known
     st = f.step(1e9, 0.0)
@@ -152,7 +157,7 @@ def test_a_time_jump_beyond_the_largest_gap_starts_again_unknown() -> None:
 
 
 def test_a_gap_within_the_limit_is_integrated() -> None:
-    f = TrackFilter(config=FilterConfig(initial_position_m=0.0))
+    f = TrackFilter(config=KNOWN_CRUISE)
     _cruise(f, 100)
     st = f.step(99.0 + f.cfg.max_gap_s, 0.0, 15.0, 1.0)
     assert st.position_known and _speed_known(f)

@@ -18,54 +18,46 @@ from core.settings import get_settings
 from service.migrate import upgrade
 from tests.conftest import ADMIN, POSTGRES_URL, app_on
 from tests.service.linekit import build_line, event
+from tests.service.scratchdb import drop, scratch_database, scratch_name
 from tests.service.test_service_snapshots import encoded, upload
 
 DEPLOY = Path(__file__).resolve().parents[2] / "deploy"
-SOURCE_DB, TARGET_DB = "depot_ops_backup_src", "depot_ops_backup_dst"
 pytestmark = pytest.mark.skipif(
     not POSTGRES_URL or shutil.which("pg_dump") is None,
     reason="needs DEPOT_TEST_POSTGRES_URL and the PostgreSQL client tools",
 )
 
 
-def _server_url() -> str:
-    assert POSTGRES_URL
-    return POSTGRES_URL.rsplit("/", 1)[0]
-
-
 @pytest.fixture
 def source(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[dict[str, str]]:
-    """A migrated database with a line, events, a person and a snapshot image."""
-    admin = create_engine(f"{_server_url()}/postgres", isolation_level="AUTOCOMMIT")
-    with admin.connect() as connection:
-        connection.execute(text(f'DROP DATABASE IF EXISTS "{SOURCE_DB}" WITH (FORCE)'))
-        connection.execute(text(f'CREATE DATABASE "{SOURCE_DB}"'))
-    admin.dispose()
-    url = f"{_server_url()}/{SOURCE_DB}"
-    upgrade(url)
-    monkeypatch.setenv("DEPOT_DATA_DIR", str(tmp_path / "data"))
-    get_settings.cache_clear()
-    engine = make_engine(url)
-    with TestClient(app_on(engine)) as client:
-        keys = build_line(client)
-        body = event("bk-ac-1", "axle_count", section="AB", axles=16)
-        assert client.post("/api/v1/events", json=body, headers=keys["A-ac"]).status_code == 201
-        shot = upload(client, keys["A-cam"], encoded(".jpg"), event_id="bk-cam-1")
-        assert getattr(shot, "status_code", None) == 201
-        person = {"name": "olena", "role": "dispatcher"}
-        assert client.post("/api/v1/users", json=person, headers=ADMIN).status_code == 201
-    engine.dispose()
-    get_settings.cache_clear()
-    yield {
-        **os.environ,
-        "DEPOT_DATABASE_URL": url,
-        "DEPOT_DATA_DIR": str(tmp_path / "data"),
-        "DEPOT_RESTORE_TEST_DB": TARGET_DB,
-    }
-    admin = create_engine(f"{_server_url()}/postgres", isolation_level="AUTOCOMMIT")
-    with admin.connect() as connection:
-        connection.execute(text(f'DROP DATABASE IF EXISTS "{SOURCE_DB}" WITH (FORCE)'))
-    admin.dispose()
+    """A migrated database with a line, events, a person and a snapshot image; the
+    restore test's target named too (both this run's own: tests/service/scratchdb.py)."""
+    target = scratch_name("backup_dst")
+    with scratch_database("backup_src") as url:
+        upgrade(url)
+        monkeypatch.setenv("DEPOT_DATA_DIR", str(tmp_path / "data"))
+        get_settings.cache_clear()
+        engine = make_engine(url)
+        with TestClient(app_on(engine)) as client:
+            keys = build_line(client)
+            body = event("bk-ac-1", "axle_count", section="AB", axles=16)
+            posted = client.post("/api/v1/events", json=body, headers=keys["A-ac"])
+            assert posted.status_code == 201
+            shot = upload(client, keys["A-cam"], encoded(".jpg"), event_id="bk-cam-1")
+            assert getattr(shot, "status_code", None) == 201
+            person = {"name": "olena", "role": "dispatcher"}
+            assert client.post("/api/v1/users", json=person, headers=ADMIN).status_code == 201
+        engine.dispose()
+        get_settings.cache_clear()
+        try:
+            yield {
+                **os.environ,
+                "DEPOT_DATABASE_URL": url,
+                "DEPOT_DATA_DIR": str(tmp_path / "data"),
+                "DEPOT_RESTORE_TEST_DB": target,
+            }
+        finally:
+            drop(target)
 
 
 def test_a_backup_restores_every_row_and_image(source: dict[str, str]) -> None:
@@ -101,7 +93,8 @@ def test_a_damaged_backup_is_refused(source: dict[str, str], tmp_path: Path) -> 
 def test_the_restore_test_never_drops_the_database_it_checks(source: dict[str, str]) -> None:
     """With DEPOT_RESTORE_TEST_DB naming the source, the script dropped the live database and
     called an empty result verified (found by the independent trial)."""
-    same = {**source, "DEPOT_RESTORE_TEST_DB": SOURCE_DB}
+    checked = source["DEPOT_DATABASE_URL"].rsplit("/", 1)[1]
+    same = {**source, "DEPOT_RESTORE_TEST_DB": checked}
     done = subprocess.run(
         [DEPLOY / "restore-test.sh"], env=same, capture_output=True, text=True, timeout=300
     )
@@ -147,3 +140,13 @@ def test_a_backup_is_readable_by_its_owner_only(source: dict[str, str], tmp_path
     for part in ("database.dump", "images.tar", "SHA256SUMS"):
         mode = (backup / part).stat().st_mode & 0o777
         assert mode == 0o600, (part, oct(mode))
+
+
+def test_the_databases_are_this_runs_own(source: dict[str, str]) -> None:
+    """Fixed names (depot_ops_backup_src/dst) made two runs on one server drop each other's
+    databases: the names derive from DEPOT_TEST_POSTGRES_URL's database and a uuid."""
+    assert POSTGRES_URL
+    own = POSTGRES_URL.rsplit("/", 1)[1] + "_"
+    src = source["DEPOT_DATABASE_URL"].rsplit("/", 1)[1]
+    dst = source["DEPOT_RESTORE_TEST_DB"]
+    assert src.startswith(own) and dst.startswith(own) and src != dst, (src, dst)

@@ -3,8 +3,13 @@ API, refusing what the CLI refuses (the same domain checks, problem+json)."""
 
 from __future__ import annotations
 
+import json
+
+import pytest
 from fastapi.testclient import TestClient
 
+from service.commands import motion as cli
+from service.trains import braking as braking_api
 from tests.conftest import ADMIN
 
 URL = "/api/v1/motion/braking-plan"
@@ -48,3 +53,33 @@ def test_an_inverted_margin_is_refused_as_problem_json(client: TestClient) -> No
 
 def test_readers_only(client: TestClient) -> None:
     assert client.post(URL, json={"speed_mps": 1, "deceleration_mps2": 1}).status_code == 401
+
+
+def test_the_cli_and_the_api_answer_from_one_builder(
+    client: TestClient, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``depot braking plan --json`` and the endpoint built the answer each their own way;
+    now both go through service.trains.braking.plan and answer alike."""
+    built: list[braking_api.BrakingPlanIn] = []
+    real = braking_api.plan
+
+    def counted(body: braking_api.BrakingPlanIn) -> braking_api.BrakingPlanOut:
+        built.append(body)
+        return real(body)
+
+    monkeypatch.setattr(braking_api, "plan", counted)
+    argv = ["braking", "plan", "--speed", "20", "--decel", "1", "--gradient", "-8"]
+    argv += ["--delta-l-max", "400", "-k", "2", "--channels", "2", "--obstacle-at", "5000"]
+    assert cli.main([*argv, "--json"]) == 0
+    from_cli = json.loads(capsys.readouterr().out)
+    body = {
+        "speed_mps": 20.0,
+        "deceleration_mps2": 1.0,
+        "gradient_permille": -8.0,
+        "errors": {"delta_l_max_m": 400.0, "measurements": 2, "channels": 2},
+        "obstacle_at_m": 5000.0,
+    }
+    answer = client.post(URL, json=body, headers=ADMIN)
+    assert answer.status_code == 200, answer.text
+    assert len(built) == 2 and built[0] == built[1]
+    assert from_cli == answer.json()

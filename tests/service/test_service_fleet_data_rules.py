@@ -9,11 +9,9 @@ years ahead was stored, and two concurrent posts of one test both stored a row.
 from __future__ import annotations
 
 import io
-import os
 import threading
-from collections.abc import Callable, Iterator
-from datetime import UTC, datetime, timedelta
-from pathlib import Path
+from collections.abc import Callable
+from datetime import datetime, timedelta
 from typing import Any
 
 import pytest
@@ -23,7 +21,7 @@ from sqlalchemy import Engine, func, select
 from sqlalchemy.orm import Session
 
 from core.database import utcnow
-from core.errors import Conflict, Unprocessable
+from core.errors import Conflict
 from core.settings import get_settings
 from service.fleet import service as fleet_service
 from service.fleet.importing import parse_tests
@@ -31,35 +29,14 @@ from service.fleet.models import Measurement, encode_readings
 from service.fleet.rules import registered
 from service.migrate import upgrade
 from service.setup.service import create_user
+from tests.service import fleetkit
+from tests.service.fleetkit import HEADER, T0, measurement_count, refusal
 from tests.service.linekit import build_line, register_bands
 
-T0 = datetime(2026, 11, 1, 7, 30, tzinfo=UTC)
-HEADER = "car,taken_at,door_close_s,brake_release_s\n"
-
-
-@pytest.fixture
-def keys(client: TestClient) -> dict[str, dict[str, str]]:
-    keys = build_line(client)
-    register_bands(client)
-    return keys
-
-
-@pytest.fixture
-def engineer(session: Session) -> dict[str, str]:
-    token = create_user(session, "iryna", "engineer")
-    session.commit()
-    return {"Authorization": f"Bearer {token}"}
-
-
-def _refusal(session: Session, text: str) -> str:
-    with pytest.raises(Unprocessable) as refused:
-        parse_tests(io.StringIO(text), registered(session))
-    return refused.value.detail
-
-
-def _count(session: Session) -> int:
-    return session.scalar(select(func.count()).select_from(Measurement)) or 0
-
+# The shared fixtures (pytest finds a fixture by its module's names).
+engineer = fleetkit.engineer
+keys = fleetkit.keys
+url = fleetkit.url
 
 # -- only ASCII decimal numbers ------------------------------------------------------------
 
@@ -71,7 +48,7 @@ def _count(session: Session) -> int:
 def test_csv_numbers_that_only_python_reads_are_refused(
     keys: dict, session: Session, cell: str
 ) -> None:
-    detail = _refusal(session, HEADER + f"0117,2026-11-01T07:30:00Z,2.4,{cell}\n")
+    detail = refusal(session, HEADER + f"0117,2026-11-01T07:30:00Z,2.4,{cell}\n")
     assert "line 2, column brake_release_s" in detail, detail
     assert repr(cell) in detail and "ASCII decimal" in detail, detail
 
@@ -92,7 +69,7 @@ def test_csv_test_dated_ahead_of_the_server_clock_is_refused(keys: dict, session
     skew = get_settings().max_clock_skew_s
     soon = (utcnow() + timedelta(seconds=skew / 2)).isoformat()
     ahead = (utcnow() + timedelta(days=3 * 365)).isoformat()
-    detail = _refusal(session, HEADER + f"0117,{soon},2.4,4.1\n0117,{ahead},2.4,4.1\n")
+    detail = refusal(session, HEADER + f"0117,{soon},2.4,4.1\n0117,{ahead},2.4,4.1\n")
     assert "line 3: taken_at" in detail and "ahead of the server's clock" in detail, detail
     assert f"{skew:g} s" in detail and "DEPOT_MAX_CLOCK_SKEW_S" in detail, detail
     assert "line 2" not in detail, "within the allowed skew is accepted"
@@ -110,7 +87,7 @@ def test_api_test_dated_ahead_of_the_server_clock_is_refused(
     assert answer.headers["content-type"] == "application/problem+json"
     assert answer.json()["errors"][0]["loc"] == ["body", "taken_at"]
     assert "ahead of the server's clock" in answer.json()["detail"]
-    assert _count(session) == 0
+    assert measurement_count(session) == 0
     assert (
         post(utcnow() + timedelta(seconds=get_settings().max_clock_skew_s / 2)).status_code == 201
     )
@@ -152,7 +129,7 @@ def test_the_store_answers_a_row_it_did_not_write_by_the_repeat_rule(
     missed.clear()
     with pytest.raises(Conflict, match="already has a test"):
         fleet_service.store_test(session, "0117", T0, {"door_close_s": 2.6}, source="api")
-    assert _count(session) == 1
+    assert measurement_count(session) == 1
 
 
 @pytest.mark.parametrize(
@@ -209,25 +186,6 @@ def test_two_concurrent_posts_of_one_test_store_one_row(
 
 
 # -- the migration ---------------------------------------------------------------------------
-
-
-@pytest.fixture(params=["sqlite", "postgresql"])
-def url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
-    if request.param == "sqlite":
-        yield f"sqlite:///{tmp_path / 'm0009.sqlite3'}"
-        return
-    base = os.environ.get("DEPOT_TEST_POSTGRES_URL")
-    if not base:
-        pytest.skip("DEPOT_TEST_POSTGRES_URL is not set; PostgreSQL tests skipped")
-    name = base.rsplit("/", 1)[1] + "_m0009"  # beside the test database, never another's
-    admin = sa.create_engine(base, isolation_level="AUTOCOMMIT")
-    with admin.connect() as connection:
-        connection.execute(sa.text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
-        connection.execute(sa.text(f'CREATE DATABASE "{name}"'))
-    yield base.rsplit("/", 1)[0] + f"/{name}"
-    with admin.connect() as connection:
-        connection.execute(sa.text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
-    admin.dispose()
 
 
 def _old_tests(url: str, rows: list[tuple[datetime, list[float], str]]) -> Engine:
@@ -314,7 +272,7 @@ def test_api_test_repeating_a_parameter_is_refused(
     assert answer.status_code == 422, answer.text
     assert answer.headers["content-type"] == "application/problem+json"
     assert "repeats the key 'door_close_s'" in answer.json()["detail"]
-    assert _count(session) == 0
+    assert measurement_count(session) == 0
 
 
 @pytest.mark.parametrize("value", ["3.1", True, None, [3.1]])
@@ -325,7 +283,7 @@ def test_api_test_value_that_is_not_a_json_number_is_refused(
     answer = client.post("/api/v1/cars/0117/measurements", json=body, headers=engineer)
     assert answer.status_code == 422, answer.text
     assert answer.json()["errors"][0]["loc"][:3] == ["body", "values", "door_close_s"]
-    assert _count(session) == 0
+    assert measurement_count(session) == 0
 
 
 def test_api_test_integer_values_stay_accepted(

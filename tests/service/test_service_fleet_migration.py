@@ -3,17 +3,17 @@
 from __future__ import annotations
 
 import json
-import os
-from collections.abc import Iterator
 from datetime import UTC, datetime
-from pathlib import Path
 
-import pytest
 import sqlalchemy as sa
 from alembic import command
 
 from service.fleet.models import decode_readings
 from service.migrate import alembic_config, upgrade
+from tests.service import fleetkit
+
+# The shared fixtures (pytest finds a fixture by its module's names).
+url = fleetkit.url
 
 T0 = datetime(2026, 11, 1, 7, 30, tzinfo=UTC)
 T1 = datetime(2026, 11, 3, 7, 30, tzinfo=UTC)
@@ -24,25 +24,6 @@ OLD_ROWS = [  # (taken_at, parameter, value, raw_event_id, source)
     (T1, "brake_release_s", 4.0, None, "csv"),
     (T1, "brake_release_s", 4.2, None, "csv"),  # repeated: the later value is kept
 ]
-
-
-@pytest.fixture(params=["sqlite", "postgresql"])
-def url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
-    if request.param == "sqlite":
-        yield f"sqlite:///{tmp_path / 'migration.sqlite3'}"
-        return
-    base = os.environ.get("DEPOT_TEST_POSTGRES_URL")
-    if not base:
-        pytest.skip("DEPOT_TEST_POSTGRES_URL is not set; PostgreSQL tests skipped")
-    name = "depot_fleet_migration_test"
-    admin = sa.create_engine(base, isolation_level="AUTOCOMMIT")
-    with admin.connect() as connection:
-        connection.execute(sa.text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
-        connection.execute(sa.text(f'CREATE DATABASE "{name}"'))
-    yield base.rsplit("/", 1)[0] + f"/{name}"
-    with admin.connect() as connection:
-        connection.execute(sa.text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
-    admin.dispose()
 
 
 def _rows(engine: sa.Engine, query: str) -> list[sa.Row]:

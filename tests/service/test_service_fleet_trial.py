@@ -9,54 +9,29 @@ tolerance ranked as serviceable below cars inside their bands.
 from __future__ import annotations
 
 import io
-from datetime import UTC, datetime, timedelta
+from datetime import datetime, timedelta
 
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
-from sqlalchemy import func, select
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from core.errors import Unprocessable
 from ingest.models import RawEvent
 from service.fleet import views
 from service.fleet.calibration import FleetIndex
 from service.fleet.forecasts import ForecastOptions, forecast_row
 from service.fleet.history import CarHistory, load_bands
 from service.fleet.importing import parse_tests
-from service.fleet.models import Forecast, Measurement
+from service.fleet.models import Forecast
 from service.fleet.rules import registered
-from service.setup.service import create_user
-from tests.service.linekit import build_line, event, register_bands
+from tests.service import fleetkit
+from tests.service.fleetkit import HEADER, T0, measurement_count, refusal
+from tests.service.linekit import event
 
-T0 = datetime(2026, 11, 1, 7, 30, tzinfo=UTC)
-HEADER = "car,taken_at,door_close_s,brake_release_s\n"
-
-
-@pytest.fixture
-def keys(client: TestClient) -> dict[str, dict[str, str]]:
-    keys = build_line(client)
-    register_bands(client)
-    return keys
-
-
-@pytest.fixture
-def engineer(session: Session) -> dict[str, str]:
-    token = create_user(session, "iryna", "engineer")
-    session.commit()
-    return {"Authorization": f"Bearer {token}"}
-
-
-def _count(session: Session) -> int:
-    return session.scalar(select(func.count()).select_from(Measurement)) or 0
-
-
-def _parse(session: Session, text: str) -> str:
-    """The refusal's detail of parsing ``text`` (fails the test when it is accepted)."""
-    with pytest.raises(Unprocessable) as refused:
-        parse_tests(io.StringIO(text), registered(session))
-    return refused.value.detail
-
+# The shared fixtures (pytest finds a fixture by its module's names).
+engineer = fleetkit.engineer
+keys = fleetkit.keys
 
 # (a) a decimal comma whose fields still match the column count ----------------------------
 
@@ -79,24 +54,24 @@ def _parse(session: Session, text: str) -> str:
 def test_decimal_comma_with_matching_field_count_is_refused(
     keys: dict, session: Session, rows: str, expected: str
 ) -> None:
-    detail = _parse(session, HEADER + rows)
+    detail = refusal(session, HEADER + rows)
     assert expected in detail and "decimal comma" in detail, detail
 
 
 def test_value_under_an_unnamed_column_is_refused(keys: dict, session: Session) -> None:
     # An exported header with a trailing separator: the fraction of 2,5 fell into column 4.
-    detail = _parse(session, "car,taken_at,door_close_s,\n0117,2026-11-01T07:30:00Z,2,5\n")
+    detail = refusal(session, "car,taken_at,door_close_s,\n0117,2026-11-01T07:30:00Z,2,5\n")
     assert "line 2, column 4" in detail and "decimal comma" in detail, detail
 
 
 def test_a_column_named_twice_is_refused(keys: dict, session: Session) -> None:
     """Only the second of two door_close_s cells was stored, silently (second trial)."""
     text = "car,taken_at,door_close_s,door_close_s\n0117,2026-11-10T08:00:00Z,3.1,3.3\n"
-    assert "door_close_s more than once" in _parse(session, text)
+    assert "door_close_s more than once" in refusal(session, text)
 
 
 def test_semicolon_separated_file_is_named(keys: dict, session: Session) -> None:
-    detail = _parse(session, "car;taken_at;door_close_s\n0117;2026-11-01T07:30:00Z;2,5\n")
+    detail = refusal(session, "car;taken_at;door_close_s\n0117;2026-11-01T07:30:00Z;2,5\n")
     assert "';'" in detail and "decimal" in detail, detail
 
 
@@ -120,12 +95,12 @@ def test_contradictory_rows_are_refused_with_their_lines(keys: dict, session: Se
         "0118,2026-11-01T07:30:00Z,2.38,3.97\n"
         "0117,2026-11-01T07:30:00+00:00,2.51,4.02\n"
     )
-    detail = _parse(session, text)
+    detail = refusal(session, text)
     assert "lines 2 and 4" in detail and "door_close_s" in detail, detail
     long = "car,taken_at,parameter,value\n" + (
         "0117,2026-11-01T07:30:00Z,door_close_s,2.4\n0117,2026-11-01T07:30:00Z,door_close_s,2.6\n"
     )
-    assert "lines 2 and 3" in _parse(session, long)
+    assert "lines 2 and 3" in refusal(session, long)
 
 
 def test_repeated_and_complementary_rows_are_one_test(keys: dict, session: Session) -> None:
@@ -161,7 +136,7 @@ def test_api_same_test_again_is_idempotent_and_a_changed_one_conflicts(
     assert changed.status_code == 409, changed.text
     assert changed.headers["content-type"] == "application/problem+json"
     assert "door_close_s" in changed.json()["detail"]
-    assert _count(session) == 1
+    assert measurement_count(session) == 1
     later = _measure(client, engineer, {"door_close_s": 2.6}, at=T0 + timedelta(days=1))
     assert later.status_code == 201
 
@@ -181,7 +156,7 @@ def test_refused_event_values_answer_422_and_store_nothing(
     refused = client.post("/api/v1/events", json=misspelt, headers=keys["D-bench"])
     assert refused.status_code == 422 and "did you mean 'door_close_s'" in refused.text
     assert session.scalars(select(RawEvent).where(RawEvent.kind == "measurement")).all() == []
-    assert _count(session) == 0
+    assert measurement_count(session) == 0
     # in a batch the refused item is rejected with the reason, the good one stored
     good = event("m-3", "measurement", car="0117", values={"door_close_s": 2.4})
     batch = client.post("/api/v1/events", json={"events": [body, good]}, headers=keys["D-bench"])
@@ -189,7 +164,7 @@ def test_refused_event_values_answer_422_and_store_nothing(
     first, second = batch.json()["results"]
     assert first["status"] == "rejected" and "plausible" in first["error"]["detail"]
     assert second["status"] == "created"
-    assert _count(session) == 1
+    assert measurement_count(session) == 1
 
 
 def test_an_event_never_rewrites_a_stored_test(
@@ -206,12 +181,12 @@ def test_an_event_never_rewrites_a_stored_test(
     assert "already has a test" in answer.json()["detail"]
     again = {**first, "event_id": "t-3"}
     assert client.post("/api/v1/events", json=again, headers=keys["D-bench"]).status_code == 201
-    assert _count(session) == 1
+    assert measurement_count(session) == 1
     batch = {"events": [{**other, "event_id": "t-4"}, {**first, "event_id": "t-5"}]}
     results = client.post("/api/v1/events", json=batch, headers=keys["D-bench"]).json()["results"]
     assert [r["status"] for r in results] == ["rejected", "created"]
     assert results[0]["error"]["status"] == 409
-    assert _count(session) == 1
+    assert measurement_count(session) == 1
 
 
 # (e) an inverted plausible range ----------------------------------------------------------

@@ -109,3 +109,22 @@ def test_an_impossible_clock_is_refused_naming_t(client: TestClient) -> None:
     response = client.post("/api/v1/events", json={"events": [bad]}, headers=keys["T-obu"])
     text = response.text
     assert "t must be within" in text and "cannot be stored" not in text, text
+
+
+def test_an_on_board_restart_is_followed_through_the_api(client: TestClient) -> None:
+    """The unit reboots after 100 s: its clock starts again at 0.5 s.  The first
+    samples after it are refused as old, then the restart is taken (the count kept
+    in the train's stored filter between samples) and the speed follows GNSS again."""
+    keys = build_line(client)
+    before = _moving_start(100, 15.0)
+    after = [
+        body
+        | {"event_id": f"rb-{i}", "t": 0.5 + i, "occurred_at": iso(T0 + timedelta(seconds=101 + i))}
+        for i, body in enumerate(_moving_start(20, 15.0))
+    ]
+    for batch in (before, after):
+        response = client.post("/api/v1/events", json={"events": batch}, headers=keys["T-obu"])
+        assert response.status_code == 200
+    position = client.get("/api/v1/trains/T7/position", headers=ADMIN).json()
+    assert position["t"] == 19.5, position
+    assert position["speed_known"] is True and abs(position["speed_mps"] - 15.0) < 0.5

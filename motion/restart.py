@@ -1,0 +1,83 @@
+"""On-board restarts seen by :class:`motion.fusion.TrackFilter`.
+
+An on-board unit that reboots starts its clock ``t`` again from (near) zero
+in the middle of the stream.  Every sample after that is far older than the
+filter's buffer and was refused for good (found by the independent trial).
+A single old sample must still be refused: a late batch of old samples must
+not wipe a good estimate.  So a restart is taken only when
+``FilterConfig.restart_confirm_samples`` samples in a row lie more than
+``FilterConfig.restart_jump_s`` behind the newest one and run forward among
+themselves (each after the previous, by at most ``max_gap_s``), as a rebooted
+clock does; one live sample in between, or one going back, and the run
+starts over.  The samples of the run before the last are refused
+(:class:`~motion.samples.StaleSampleError`): a restart costs them.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .buffer import TIME_TOLERANCE_S
+from .samples import FilterConfig, StaleSampleError
+
+__all__ = ["RestartWatch"]
+
+
+class RestartWatch:
+    """The run of far-behind samples of one filter: time of the latest, count."""
+
+    __slots__ = ("cfg", "last_t", "count")
+
+    def __init__(self, cfg: FilterConfig) -> None:
+        self.cfg = cfg
+        self.last_t = 0.0
+        self.count = 0
+
+    def check(self, t: float, oldest_t: float, newest_t: float) -> bool:
+        """Whether the sample at ``t`` (the buffer spanning ``oldest_t`` to
+        ``newest_t``) confirms a restart; raises :class:`StaleSampleError` for an
+        old sample that does not, counting it when it is far behind."""
+        if t >= oldest_t - TIME_TOLERANCE_S:
+            self.clear()  # inside the buffer or newer: the stream goes on
+            return False
+        if not self.far_behind(t, newest_t):
+            self.clear()
+            raise StaleSampleError(
+                f"sample at t={t} is older than the filter's buffer (starts at t={oldest_t})"
+            )
+        if self.confirmed(t):
+            return True
+        raise StaleSampleError(
+            f"sample at t={t} is far older than the filter's buffer (newest t={newest_t}):"
+            f" refused; {self.cfg.restart_confirm_samples - self.count} more in a row"
+            " would be taken as an on-board restart"
+        )
+
+    def far_behind(self, t: float, newest_t: float) -> bool:
+        """Whether ``t`` is a possible restart, not an ordinary late sample."""
+        return newest_t - t > self.cfg.restart_jump_s
+
+    def confirmed(self, t: float) -> bool:
+        """Count the far-behind sample ``t``; whether the restart is now confirmed."""
+        if self.count and self.last_t < t <= self.last_t + self.cfg.max_gap_s:
+            self.count += 1
+        else:
+            self.count = 1
+        self.last_t = t
+        if self.count < self.cfg.restart_confirm_samples:
+            return False
+        self.clear()
+        return True
+
+    def clear(self) -> None:
+        self.last_t, self.count = 0.0, 0
+
+    def to_json(self) -> list[Any] | None:
+        """``None`` with no run going (the snapshot then keeps its older form)."""
+        return [self.last_t, self.count] if self.count else None
+
+    def restore(self, d: list[Any] | None) -> None:
+        if not d:
+            self.clear()
+            return
+        self.last_t, self.count = float(d[0]), int(d[1])
