@@ -15,9 +15,15 @@ class TrainPositionOut(BaseModel):
     updated_at: Instant = Field(description="device time of the newest sample applied")
     t: float = Field(description="the on-board clock of that sample, s")
     position_m: float = Field(description="coordinate along the line, m")
-    speed_mps: float = Field(description="speed along the line, m/s")
+    speed_mps: float = Field(
+        description="speed along the line, m/s; a magnitude (no sign) while direction is 0"
+    )
     acceleration_mps2: float
-    direction: int = Field(description="1 forward, -1 backward, 0 standing")
+    direction: int = Field(
+        description="1 forward, -1 backward, 0 standing or not yet known (GNSS speed has no"
+        " sign: until a standstill, a known prior or two position fixes show it, no direction"
+        " is claimed and the position is given both ways from where the sign was assumed)"
+    )
     sigma_position_m: float = Field(description="one standard deviation of the position, m")
     sigma_speed_mps: float
     speed_known: bool = Field(
