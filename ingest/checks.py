@@ -17,11 +17,36 @@ from core.errors import Forbidden, Unprocessable, validation_errors
 from core.models import Device, Section
 from core.schemas import format_instant
 from core.settings import get_settings
-from ingest.schemas import ALLOWED_KINDS, EVENT_ADAPTER, EVENT_KINDS, TailSnapshot
+from ingest.schemas import (
+    ALLOWED_KINDS,
+    EVENT_ADAPTER,
+    EVENT_KINDS,
+    EVENT_LIST_ADAPTER,
+    TailSnapshot,
+)
 
 
 def parse_event(payload: Any) -> Any:
     """Validate one event against the schema of its kind; 422 names the offending fields."""
+    event = _parse_schema(payload)
+    check_clock(event, utcnow())
+    return event
+
+
+def parse_events(payloads: list[Any]) -> list[Any] | None:
+    """The events of a batch's items validated in one pass (the clock is checked per item
+    afterwards, by :func:`check_clock`), or None when any item is not a valid event: then
+    each is judged alone by :func:`parse_event`, which names its faults."""
+    for payload in payloads:
+        if not isinstance(payload, dict) or payload.get("kind") not in EVENT_KINDS:
+            return None
+    try:
+        return EVENT_LIST_ADAPTER.validate_python(payloads)
+    except ValidationError:
+        return None
+
+
+def _parse_schema(payload: Any) -> Any:
     if not isinstance(payload, dict):
         raise Unprocessable(
             "an event must be a JSON object", errors=[{"loc": ["body"], "msg": "not an object"}]
@@ -43,7 +68,6 @@ def parse_event(payload: Any) -> Any:
             error["loc"] = ["body", *error["loc"]]
         fields = ", ".join(".".join(e["loc"][1:]) for e in errors[:5])
         raise Unprocessable(f"invalid {kind} event: {fields}", errors=errors) from None
-    check_clock(event, utcnow())
     return event
 
 
