@@ -75,8 +75,8 @@ def check_clock(event: Any, now: datetime) -> None:
     """Refuse an event from a device clock running ahead of the server's by more than
     ``DEPOT_MAX_CLOCK_SKEW_S``: a clock set to 2030 would otherwise keep its device "alive"
     for years and put evidence into runs that have not happened yet."""
-    skew = get_settings().max_clock_skew_s
-    if event.occurred_at > now + timedelta(seconds=skew):
+    if event.occurred_at > latest_allowed(now):
+        skew = get_settings().max_clock_skew_s
         ahead = (event.occurred_at - now).total_seconds()
         raise Unprocessable(
             f"occurred_at {format_instant(event.occurred_at)} is {ahead:.0f} s ahead of the"
@@ -84,6 +84,11 @@ def check_clock(event: Any, now: datetime) -> None:
             " is allowed: set the device's clock (NTP) and send the event again",
             errors=[{"loc": ["body", "occurred_at"], "msg": "ahead of the server's clock"}],
         )
+
+
+def latest_allowed(now: datetime) -> datetime:
+    """The latest ``occurred_at`` :func:`check_clock` accepts at server time ``now``."""
+    return now + timedelta(seconds=get_settings().max_clock_skew_s)
 
 
 def check_device_may_send(device: Device, kind: str) -> None:

@@ -135,7 +135,10 @@ def touched_at_end(session: Session) -> Iterator[None]:
         yield
     finally:
         session.info.pop(_LATER, None)
-    for device, received in sorted(later, key=lambda item: item[0].id):
+    # The same (device, instant) twice changes nothing the first did not (a batch's events
+    # share their instant of receipt): touched once.
+    once = {(device.id, received): (device, received) for device, received in later}
+    for device, received in sorted(once.values(), key=lambda item: item[0].id):
         touch(session, device, received, replaying=False)
 
 
