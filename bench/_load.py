@@ -90,30 +90,37 @@ def have_wrk() -> bool:
     return shutil.which("wrk") is not None
 
 
-def _wrk(
-    url: str,
-    keys: list[str],
-    prefix: str,
-    *,
-    batch: int,
-    connections: int,
-    seconds: float,
-    single: str,
-) -> Round:
+@dataclass(frozen=True)
+class Load:
+    """What one round sends: to ``url``, with device ``keys`` in rotation, ``event_id``s
+    starting with ``prefix``; ``batch`` 0 posts single events of kind ``single``
+    (``axle_count`` or ``heartbeat``), else batches of ``batch`` heartbeats; ``connections``
+    at once for ``seconds``."""
+
+    url: str
+    keys: list[str]
+    prefix: str
+    batch: int
+    connections: int
+    seconds: float
+    single: str = "axle_count"
+
+
+def _wrk(load: Load) -> Round:
     script = LUA % {
-        "keys": ", ".join(f'"{k}"' for k in keys),
-        "prefix": prefix,
-        "batch": batch,
+        "keys": ", ".join(f'"{k}"' for k in load.keys),
+        "prefix": load.prefix,
+        "batch": load.batch,
         "threads": WRK_THREADS,
-        "single": single,
+        "single": load.single,
     }
     with tempfile.NamedTemporaryFile("w", suffix=".lua", delete=False) as handle:
         handle.write(script)
     try:
         done = subprocess.run(
-            ["wrk", f"-t{WRK_THREADS}", f"-c{connections}", f"-d{seconds:g}s", "--timeout", "30s",
-             "-s", handle.name, url],
-            capture_output=True, text=True, check=True, timeout=seconds + 60,
+            ["wrk", f"-t{WRK_THREADS}", f"-c{load.connections}", f"-d{load.seconds:g}s",
+             "--timeout", "30s", "-s", handle.name, load.url],
+            capture_output=True, text=True, check=True, timeout=load.seconds + 60,
         )  # fmt: skip
     finally:
         Path(handle.name).unlink()
@@ -148,19 +155,10 @@ def _body(prefix: str, n: int, batch: int, single: str) -> dict[str, object]:
     }  # fmt: skip
 
 
-async def _python(
-    url: str,
-    keys: list[str],
-    prefix: str,
-    *,
-    batch: int,
-    connections: int,
-    seconds: float,
-    single: str,
-) -> Round:
+async def _python(load: Load) -> Round:
     latencies: list[float] = []
     failed = 0
-    deadline = time.perf_counter() + seconds
+    deadline = time.perf_counter() + load.seconds
 
     async def connection(c: int, client: httpx.AsyncClient) -> None:
         nonlocal failed
@@ -170,18 +168,18 @@ async def _python(
             start = time.perf_counter()
             response = await client.post(
                 "/api/v1/events",
-                json=_body(f"{prefix}-{c}", n, batch, single),
-                headers={"X-Device-Key": keys[(c + connections * n) % len(keys)]},
+                json=_body(f"{load.prefix}-{c}", n, load.batch, load.single),
+                headers={"X-Device-Key": load.keys[(c + load.connections * n) % len(load.keys)]},
             )
             if response.status_code in (200, 201):
                 latencies.append(time.perf_counter() - start)
             else:
                 failed += 1
 
-    limits = httpx.Limits(max_connections=connections)
-    async with httpx.AsyncClient(base_url=url, limits=limits, timeout=30) as client:
+    limits = httpx.Limits(max_connections=load.connections)
+    async with httpx.AsyncClient(base_url=load.url, limits=limits, timeout=30) as client:
         start = time.perf_counter()
-        await asyncio.gather(*(connection(c, client) for c in range(connections)))
+        await asyncio.gather(*(connection(c, client) for c in range(load.connections)))
         elapsed = time.perf_counter() - start
     q = statistics.quantiles(latencies, n=100) if len(latencies) > 2 else [0.0] * 99
     return Round(len(latencies), elapsed, failed, q[49] * 1000, q[98] * 1000)
@@ -197,9 +195,6 @@ def drive(
     seconds: float,
     single: str = "axle_count",
 ) -> Round:
-    """One round of load; ``batch`` 0 posts single events of kind ``single`` (``axle_count``
-    or ``heartbeat``), else batches of ``batch`` heartbeats."""
-    how = {"batch": batch, "connections": connections, "seconds": seconds, "single": single}
-    if have_wrk():
-        return _wrk(url, keys, prefix, **how)  # type: ignore[arg-type]
-    return asyncio.run(_python(url, keys, prefix, **how))  # type: ignore[arg-type]
+    """One round of load (see :class:`Load`), by ``wrk`` when installed, else in Python."""
+    load = Load(url, keys, prefix, batch, connections, seconds, single)
+    return _wrk(load) if have_wrk() else asyncio.run(_python(load))

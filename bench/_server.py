@@ -29,8 +29,15 @@ def free_port() -> int:
 
 
 def bench_database(name: str) -> str:
-    """A fresh PostgreSQL database ``name`` on the local server, else a temporary SQLite file."""
+    """A fresh PostgreSQL database ``name`` on the local server, else a temporary SQLite file.
+
+    With ``DEPOT_TEST_POSTGRES_URL`` naming a database of its own (not the shared ``test``),
+    ``name`` is prefixed with it: two benchmarks running at once on one server (several
+    people, one machine) would otherwise drop each other's databases mid-run."""
     base = os.environ.get("DEPOT_TEST_POSTGRES_URL", LOCAL_POSTGRES)
+    own = base.rsplit("/", 1)[1].split("?")[0]
+    if own not in ("", "test"):
+        name = f"{own}_{name}"
     try:
         engine = create_engine(base, isolation_level="AUTOCOMMIT")
         with engine.connect() as connection:

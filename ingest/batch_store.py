@@ -7,13 +7,22 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
+from core.database import utcnow
 from core.errors import Conflict, Forbidden, Unprocessable
 from core.models import Device
-from ingest.checks import check_device_may_send, check_section, parse_event
+from ingest.checks import (
+    check_clock,
+    check_device_may_send,
+    check_section,
+    latest_allowed,
+    parse_event,
+    parse_events,
+)
 from ingest.handlers import check_derivable
 from ingest.holding import holding
 from ingest.liveness import seen, touched_at_end
 from ingest.rows import insert_many, raw_values, stored_many, write_answers
+from ingest.schemas import section_of
 from ingest.store import answer_now, answer_stored, derive_new, duplicate
 
 
@@ -36,11 +45,19 @@ def validated(
     results: list[dict[str, Any] | None] = [None] * len(items)
     accepted: list[tuple[int, Any, dict[str, Any]]] = []
     sections_ok: set[str | None] = set()
+    events = parse_events(items)  # None: some item is invalid, each is then parsed alone
+    now = utcnow()
+    latest = latest_allowed(now)
     for index, item in enumerate(items):
         try:
-            event = parse_event(item)
+            if events is None:
+                event = parse_event(item)
+            else:
+                event = events[index]
+                if event.occurred_at > latest:
+                    check_clock(event, now)  # refuses it, naming the skew
             check_device_may_send(device, event.kind)
-            section = getattr(event, "section", None)
+            section = section_of(event)
             if section not in sections_ok:
                 check_section(session, device, section)
                 sections_ok.add(section)
@@ -96,9 +113,12 @@ def _accept_batch(
             repeats.append(entry)
         else:
             first[entry[1].event_id] = entry
+    # The batch came in one request: one instant of receipt for all its events (and one
+    # liveness check for the device instead of one per event).
+    received = utcnow()
     rows = {
         event.event_id: raw_values(
-            device, event, body, answer=answer_now(event), transport=transport
+            device, event, body, answer=answer_now(event), transport=transport, received=received
         )
         for _, event, body in first.values()
     }

@@ -17,11 +17,36 @@ from core.errors import Forbidden, Unprocessable, validation_errors
 from core.models import Device, Section
 from core.schemas import format_instant
 from core.settings import get_settings
-from ingest.schemas import ALLOWED_KINDS, EVENT_ADAPTER, EVENT_KINDS, TailSnapshot
+from ingest.schemas import (
+    ALLOWED_KINDS,
+    EVENT_ADAPTER,
+    EVENT_KINDS,
+    EVENT_LIST_ADAPTER,
+    TailSnapshot,
+)
 
 
 def parse_event(payload: Any) -> Any:
     """Validate one event against the schema of its kind; 422 names the offending fields."""
+    event = _parse_schema(payload)
+    check_clock(event, utcnow())
+    return event
+
+
+def parse_events(payloads: list[Any]) -> list[Any] | None:
+    """The events of a batch's items validated in one pass (the clock is checked per item
+    afterwards, by :func:`check_clock`), or None when any item is not a valid event: then
+    each is judged alone by :func:`parse_event`, which names its faults."""
+    for payload in payloads:
+        if not isinstance(payload, dict) or payload.get("kind") not in EVENT_KINDS:
+            return None
+    try:
+        return EVENT_LIST_ADAPTER.validate_python(payloads)
+    except ValidationError:
+        return None
+
+
+def _parse_schema(payload: Any) -> Any:
     if not isinstance(payload, dict):
         raise Unprocessable(
             "an event must be a JSON object", errors=[{"loc": ["body"], "msg": "not an object"}]
@@ -43,7 +68,6 @@ def parse_event(payload: Any) -> Any:
             error["loc"] = ["body", *error["loc"]]
         fields = ", ".join(".".join(e["loc"][1:]) for e in errors[:5])
         raise Unprocessable(f"invalid {kind} event: {fields}", errors=errors) from None
-    check_clock(event, utcnow())
     return event
 
 
@@ -51,8 +75,8 @@ def check_clock(event: Any, now: datetime) -> None:
     """Refuse an event from a device clock running ahead of the server's by more than
     ``DEPOT_MAX_CLOCK_SKEW_S``: a clock set to 2030 would otherwise keep its device "alive"
     for years and put evidence into runs that have not happened yet."""
-    skew = get_settings().max_clock_skew_s
-    if event.occurred_at > now + timedelta(seconds=skew):
+    if event.occurred_at > latest_allowed(now):
+        skew = get_settings().max_clock_skew_s
         ahead = (event.occurred_at - now).total_seconds()
         raise Unprocessable(
             f"occurred_at {format_instant(event.occurred_at)} is {ahead:.0f} s ahead of the"
@@ -60,6 +84,11 @@ def check_clock(event: Any, now: datetime) -> None:
             " is allowed: set the device's clock (NTP) and send the event again",
             errors=[{"loc": ["body", "occurred_at"], "msg": "ahead of the server's clock"}],
         )
+
+
+def latest_allowed(now: datetime) -> datetime:
+    """The latest ``occurred_at`` :func:`check_clock` accepts at server time ``now``."""
+    return now + timedelta(seconds=get_settings().max_clock_skew_s)
 
 
 def check_device_may_send(device: Device, kind: str) -> None:

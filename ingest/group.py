@@ -13,11 +13,12 @@ from ingest.handlers import Derivation, check_derivable, derive
 from ingest.holding import holding
 from ingest.liveness import seen, touched_at_end
 from ingest.rows import as_raw, insert_many, raw_values, stored_many, write_answers
+from ingest.schemas import section_of
 from ingest.store import answer_now, answer_stored, duplicate
 
 
 def _lock_order(item: tuple[Device, Any, dict[str, Any]]) -> tuple[str, str]:
-    return (getattr(item[1], "section", None) or "", item[0].id)
+    return (section_of(item[1]) or "", item[0].id)
 
 
 def store_group(
@@ -45,7 +46,7 @@ def _store_group(
     for index in order:
         device, event, body = items[index]
         try:
-            check_section(session, device, getattr(event, "section", None))
+            check_section(session, device, section_of(event))
             check_derivable(session, event)
         except DepotError as exc:
             outcomes[index] = exc

@@ -22,7 +22,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from datetime import datetime, timedelta
 
-from sqlalchemy import Table, event, func, or_, select, update
+from sqlalchemy import Table, bindparam, event, func, or_, select, update
 from sqlalchemy.orm import Session
 
 from core.models import Device
@@ -75,17 +75,34 @@ def touch(session: Session, device: Device, received: datetime, *, replaying: bo
         return  # the stored value is within one step of this event already
     threshold = received - LAST_SEEN_GRANULARITY
     moved = session.execute(
-        update(_DEVICES)
-        .where(
-            _DEVICES.c.id == device.id,
-            or_(_DEVICES.c.last_seen_at.is_(None), _DEVICES.c.last_seen_at < threshold),
-        )
-        .values(last_seen_at=received)
+        _TOUCH, {"device": device.id, "threshold": threshold, "seen_at": received}
     )
-    # Moved: the value is now ``received``; not moved: it was at least ``threshold`` already.
-    new_bound = received if moved.rowcount else threshold  # type: ignore[attr-defined]
+    if moved.rowcount:  # type: ignore[attr-defined]
+        new_bound = received
+    else:
+        # Not moved: the value is at least ``threshold`` (another worker, or an earlier event,
+        # put it there). ``threshold`` alone as the bound would send the update again for
+        # every later event of this device (received a moment later, so past it): 500 for a
+        # batch. The stored value itself is a bound that spares them.
+        stored = session.scalar(_LAST_SEEN, {"device": device.id})
+        new_bound = threshold if stored is None else max(stored, threshold)
     if bound is None or new_bound > bound:
         pending[ident] = new_bound
+
+
+# Built once: the statements of constant shape, with the values bound per call.
+_TOUCH = (
+    update(_DEVICES)
+    .where(
+        _DEVICES.c.id == bindparam("device"),
+        or_(
+            _DEVICES.c.last_seen_at.is_(None),
+            _DEVICES.c.last_seen_at < bindparam("threshold", type_=_DEVICES.c.last_seen_at.type),
+        ),
+    )
+    .values(last_seen_at=bindparam("seen_at", type_=_DEVICES.c.last_seen_at.type))
+)
+_LAST_SEEN = select(_DEVICES.c.last_seen_at).where(_DEVICES.c.id == bindparam("device"))
 
 
 _LATER = "depot_touch_later"
@@ -118,7 +135,10 @@ def touched_at_end(session: Session) -> Iterator[None]:
         yield
     finally:
         session.info.pop(_LATER, None)
-    for device, received in sorted(later, key=lambda item: item[0].id):
+    # The same (device, instant) twice changes nothing the first did not (a batch's events
+    # share their instant of receipt): touched once.
+    once = {(device.id, received): (device, received) for device, received in later}
+    for device, received in sorted(once.values(), key=lambda item: item[0].id):
         touch(session, device, received, replaying=False)
 
 

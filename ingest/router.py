@@ -8,7 +8,8 @@ from typing import Any, TypeVar
 
 from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
+from pydantic import TypeAdapter
 from sqlalchemy.orm import Session
 from starlette.datastructures import UploadFile
 
@@ -77,6 +78,20 @@ def _committed(store: Callable[..., T], session: Session, *args: Any) -> T:
     return result
 
 
+# The batch answer's JSON, written by pydantic's serializer: 500 items in a fraction of what
+# ``json.dumps`` takes, and in the worker thread rather than on the event loop.
+_BATCH_ANSWER: TypeAdapter[dict[str, list[dict[str, Any]]]] = TypeAdapter(
+    dict[str, list[dict[str, Any]]]
+)
+
+
+def _batch_answer(session: Session, device: Device, events: list[Any]) -> bytes:
+    """Store a batch and commit; its answer ``{"results": [...]}`` as JSON, counted."""
+    results = _committed(service.accept_batch, session, device, events)
+    metrics.batch_answered(events, results)
+    return _BATCH_ANSWER.dump_json({"results": results})
+
+
 @router.post(
     "/events",
     openapi_extra=EVENT_BODY_DOC,
@@ -90,7 +105,7 @@ def _committed(store: Callable[..., T], session: Session, *args: Any) -> T:
         422: {"description": "invalid event"},
     },
 )
-async def post_events(request: Request, session: DbSession, device: EventDevice) -> JSONResponse:
+async def post_events(request: Request, session: DbSession, device: EventDevice) -> Response:
     """Accept one event, or ``{"events": [...]}`` with at most 1000 events (each stands alone)."""
     started = time.perf_counter()  # metrics: decision latency
     settings = get_settings()
@@ -101,9 +116,8 @@ async def post_events(request: Request, session: DbSession, device: EventDevice)
     payload = read_json(body)
     events = batch_events(payload)
     if events is not None:
-        results = await run_in_threadpool(_committed, service.accept_batch, session, device, events)
-        metrics.batch_answered(events, results)
-        return JSONResponse({"results": results}, status_code=200)
+        answer = await run_in_threadpool(_batch_answer, session, device, events)
+        return Response(answer, status_code=200, media_type="application/json")
     try:
         status, result = await _single(session, device, payload, large=len(body) > INLINE_BYTES)
     except DepotError as exc:

@@ -12,6 +12,7 @@ import json
 from datetime import UTC, datetime
 from typing import Any
 
+from pydantic import ConfigDict, TypeAdapter
 from sqlalchemy import Table, bindparam, select, text, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
@@ -19,26 +20,48 @@ from sqlalchemy.orm import Session
 from core.database import utcnow
 from core.models import Device
 from ingest.models import RawEvent
+from ingest.schemas import section_of
 
 RAW: Table = RawEvent.__table__  # type: ignore[assignment]
-COLUMNS = ("device_id", "event_id", "kind", "occurred_at", "received_at", "section", "transport")
-# One statement of constant text for any number of rows: the arrays are bound as parameters.
-UNNEST_INSERT = text(
+# One statement of constant text for any number of rows: the rows travel as one JSON document
+# (one parameter), which PostgreSQL unpacks with ``json_to_recordset``. Arrays bound per column
+# cost more: psycopg escapes each text element of a text-format array with a regular
+# expression in Python, which was a third of a 500-event batch's time.
+JSON_INSERT = text(
     "INSERT INTO raw_events (device_id, event_id, kind, occurred_at, received_at, section,"
     " transport, body, body_sha256, result)"
-    " SELECT d, e, k, o, r, s, t, CAST(b AS json), h, CAST(res AS json) FROM unnest("
-    " CAST(:device_id AS text[]), CAST(:event_id AS text[]), CAST(:kind AS text[]),"
-    " CAST(:occurred_at AS timestamptz[]), CAST(:received_at AS timestamptz[]),"
-    " CAST(:section AS text[]), CAST(:transport AS text[]), CAST(:body AS text[]),"
-    " CAST(:body_sha256 AS text[]), CAST(:result AS text[]))"
-    " AS u(d, e, k, o, r, s, t, b, h, res)"
+    " SELECT device_id, event_id, kind, occurred_at, received_at, section, transport, body,"
+    " body_sha256, result FROM json_to_recordset(CAST(:rows AS json)) AS u(device_id text,"
+    " event_id text, kind text, occurred_at timestamptz, received_at timestamptz,"
+    " section text, transport text, body json, body_sha256 text, result json)"
     " ON CONFLICT (device_id, event_id) DO NOTHING RETURNING id, device_id, event_id"
 )
 
 
+# The rows' document, written by pydantic's serializer (times as ISO 8601 with their offset,
+# microseconds kept): several times faster than ``json.dumps`` with a ``default`` for them.
+# A NaN cannot be in an accepted event (every float field is checked finite); were one there,
+# it is written as NaN, which PostgreSQL refuses, rather than silently stored as null.
+_ROWS_JSON: TypeAdapter[list[dict[str, Any]]] = TypeAdapter(
+    list[dict[str, Any]], config=ConfigDict(ser_json_inf_nan="constants")
+)
+
+
+def rows_document(rows: list[dict[str, Any]]) -> str:
+    """The JSON document of raw event rows for :data:`JSON_INSERT`."""
+    return _ROWS_JSON.dump_json(rows).decode()
+
+
+# The canonical text that is hashed. One encoder for every call: ``json.dumps`` with options
+# builds a new one each time, a third of the hash's cost. The text (and so every stored hash)
+# is the same as ``json.dumps`` with these options writes.
+_CANONICAL = json.JSONEncoder(
+    sort_keys=True, separators=(",", ":"), ensure_ascii=False, default=str
+)
+
+
 def canonical_sha256(body: dict[str, Any]) -> str:
-    text_ = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=False, default=str)
-    return hashlib.sha256(text_.encode()).hexdigest()
+    return hashlib.sha256(_CANONICAL.encode(body).encode()).hexdigest()
 
 
 def _instants(value: Any) -> Any:
@@ -66,15 +89,17 @@ def raw_values(
     *,
     answer: dict[str, Any] | None,
     transport: str = "http",
+    received: datetime | None = None,
 ) -> dict[str, Any]:
-    """The row of one event; ``answer`` is stored with it when known before derivation."""
+    """The row of one event; ``answer`` is stored with it when known before derivation.
+    ``received``: when the server received it (default: now)."""
     values = {
         "device_id": device.id,
         "event_id": event.event_id,
         "kind": event.kind,
         "occurred_at": event.occurred_at,
-        "received_at": utcnow(),
-        "section": getattr(event, "section", None),
+        "received_at": received or utcnow(),
+        "section": section_of(event),
         "body": body,
         "body_sha256": event_sha256(event),
         "result": answer or {},
@@ -97,19 +122,17 @@ def insert_one(session: Session, values: dict[str, Any]) -> int | None:
 def insert_many(session: Session, rows: list[dict[str, Any]]) -> dict[tuple[str, str], int]:
     """Insert the new rows in one statement; returns their ids by (device, ``event_id``).
 
-    PostgreSQL gets ``INSERT … SELECT FROM unnest(arrays)``: one statement of constant text
-    whatever the batch size, so neither SQLAlchemy nor the server compiles 500 VALUES tuples.
+    PostgreSQL gets ``INSERT … SELECT FROM json_to_recordset(document)``: one statement of
+    constant text whatever the batch size, so neither SQLAlchemy nor the server compiles 500
+    VALUES tuples, and one parameter to send.
     """
     if not rows:
         return {}
     if session.get_bind().dialect.name != "postgresql":
         statement = _insert(session).returning(RAW.c.id, RAW.c.device_id, RAW.c.event_id)
         return {(d, e): i for i, d, e in session.execute(statement, rows)}
-    arrays: dict[str, list[Any]] = {c: [r[c] for r in rows] for c in COLUMNS}
-    arrays["body_sha256"] = [r["body_sha256"] for r in rows]
-    arrays["body"] = [json.dumps(r["body"]) for r in rows]
-    arrays["result"] = [json.dumps(r["result"]) for r in rows]
-    return {(d, e): i for i, d, e in session.execute(UNNEST_INSERT, arrays)}
+    document = rows_document(rows)
+    return {(d, e): i for i, d, e in session.execute(JSON_INSERT, {"rows": document})}
 
 
 def stored(session: Session, device_id: str, event_id: str) -> tuple[str, dict[str, Any]]:

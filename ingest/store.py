@@ -29,6 +29,7 @@ from ingest.rows import (
     stored,
     write_answers,
 )
+from ingest.schemas import section_of
 
 log = logging.getLogger("depot.ingest")
 
@@ -129,7 +130,7 @@ def accept_event(
 ) -> tuple[int, dict[str, Any]]:
     event = parse_event(payload)
     check_device_may_send(device, event.kind)
-    check_section(session, device, getattr(event, "section", None))
+    check_section(session, device, section_of(event))
     check_derivable(session, event)
     # Stored exactly as received; the canonical hash makes key order irrelevant for retries.
     return store_event(session, device, event, payload, transport=transport)
@@ -139,6 +140,6 @@ def store_validated(
     session: Session, device: Device, event: Any, body: dict[str, Any]
 ) -> tuple[int, dict[str, Any]]:
     """:func:`store_event` after the section check (which needs the database)."""
-    check_section(session, device, getattr(event, "section", None))
+    check_section(session, device, section_of(event))
     check_derivable(session, event)
     return store_event(session, device, event, body)

@@ -7,16 +7,17 @@ which is what decides its cost once the database is the bottleneck.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from datetime import UTC, datetime, timedelta
 from typing import Any
 
 import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import event as sa_event
-from sqlalchemy import func, select
+from sqlalchemy import func, select, update
 from sqlalchemy.orm import Session
 
 from core.models import Device
-from ingest import service
+from ingest import liveness, service
 from ingest.holding import held, holding
 from ingest.models import RawEvent
 from service.clearance.models import AxleReading
@@ -134,3 +135,25 @@ def test_a_group_answers_retries_from_one_look_up(
     assert [o[0] for o in outcomes if isinstance(o, tuple)] == [200] * 7
     look_ups = [s for s in statements if s.startswith("SELECT") and "FROM raw_events" in s]
     assert len(look_ups) <= 2, look_ups  # the group's, and the one for the repeat inside it
+
+
+def test_a_device_another_worker_kept_alive_costs_one_liveness_write_per_batch(
+    client: TestClient, session: Session, statements: list[str]
+) -> None:
+    """Another worker moved the device's ``last_seen_at`` a moment ago, so this worker's
+    conditional update does not match: what it learns then must spare the batch's other
+    events their own update (it asked the database once for each of the 50 events)."""
+    build_line(client)
+    device = session.get_one(Device, "B-ac")
+    moments_ago = datetime.now(UTC) - timedelta(seconds=2)
+    session.execute(update(Device).where(Device.id == "B-ac").values(last_seen_at=moments_ago))
+    liveness._known.clear()  # what this worker learnt: nothing (the other worker wrote it)
+    items = [event(f"kept-{i}", "heartbeat") for i in range(50)]
+    statements.clear()
+    results = service.accept_batch(session, device, items)
+    assert [r["status"] for r in results] == ["created"] * 50
+    touches = [s for s in statements if s.startswith("UPDATE devices")]
+    reads = [s for s in statements if "last_seen_at" in s and s.startswith("SELECT")]
+    assert len(touches) + len(reads) <= 2, touches
+    # The rule is unchanged: the stored value was within one step, so it stays.
+    assert session.scalar(select(Device.last_seen_at).where(Device.id == "B-ac")) == moments_ago
