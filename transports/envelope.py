@@ -52,12 +52,15 @@ class Message:
 
     ``received_at``: when the transport received it (JetStream: when the stream stored it;
     MQTT: when the bridge read it), the events' receive time for liveness; None: when stored.
+    ``received_is_read``: ``received_at`` is only when the bridge read it (MQTT), maybe long
+    after the broker got it; each event's receive time is then at most its own occurred_at.
     """
 
     device_id: str
     key: str | None
     payload: bytes
     received_at: datetime | None = None
+    received_is_read: bool = False
 
 
 @dataclass(frozen=True)
@@ -155,12 +158,13 @@ def authenticate(
 
 
 def accept(
-    session: Session, device: Device, payload: Any, transport: str, received: datetime | None
+    session: Session, device: Device, payload: Any, transport: str, message: Message
 ) -> Answer:
     """One payload, single event or batch, answered as ``POST /events`` answers it."""
     events = batch_events(payload)
     items = [payload] if events is None else events
-    batch = DeviceBatch(device, items, [received] * len(items))
+    received: list[datetime | None] = [message.received_at] * len(items)
+    batch = DeviceBatch(device, items, received, message.received_is_read)
     (results,) = accept_batches(session, [batch], transport=transport)
     if events is None:
         return _item_answer(results[0], device.id)
@@ -179,7 +183,7 @@ def _handle(session: Session, message: Message, transport: str, max_bytes: int) 
         with session.begin_nested():
             device = authenticate(session, message)
             payload = decode(message.payload, max_bytes)
-            answer = accept(session, device, payload, transport, message.received_at)
+            answer = accept(session, device, payload, transport, message)
         return answer
     except DepotError as exc:
         return _refusal(exc, message, payload, max_bytes)
@@ -202,7 +206,7 @@ class _Part:
     index: int
     events: list[Any]
     batch: bool  # sent as {"events": [...]}: answered with "results", as POST /events
-    received_at: datetime | None
+    message: Message
 
 
 def _item_answer(item: dict[str, Any], device_id: str) -> Answer:
@@ -238,9 +242,7 @@ def _sorted_parts(
         except DepotError as exc:
             answers[index] = _refusal(exc, message, payload, max_bytes)
             continue
-        part = _Part(
-            index, [payload] if events is None else events, events is not None, message.received_at
-        )
+        part = _Part(index, [payload] if events is None else events, events is not None, message)
         parts.setdefault(device.id, (device, []))[1].append(part)
     order = sorted(parts, key=lambda d: (parts[d][0].section or "", d))
     return {d: parts[d] for d in order}
@@ -258,7 +260,9 @@ def _grouped(
         DeviceBatch(
             device,
             [event for part in parts for event in part.events],
-            [part.received_at for part in parts for _ in part.events],
+            [part.message.received_at for part in parts for _ in part.events],
+            # one bridge's messages all alike; were they not, bounding them all is the safe side
+            any(part.message.received_is_read for part in parts),
         )
         for device, parts in by_device
     ]

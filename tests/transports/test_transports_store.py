@@ -6,14 +6,12 @@ from __future__ import annotations
 
 import json
 import uuid
-from collections.abc import Iterator
 from datetime import UTC, datetime, timedelta
 
-import pytest
 from sqlalchemy import Engine, select
 from sqlalchemy.orm import Session, sessionmaker
 
-from core.auth import device_cache, hash_secret
+from core.auth import hash_secret
 from core.models import Device, Station
 from ingest.models import RawEvent
 from service import features
@@ -24,20 +22,6 @@ def _heartbeat(event_id: str, occurred_at: str = "2026-11-23T03:00:00Z") -> byte
     return json.dumps(
         {"event_id": event_id, "kind": "heartbeat", "occurred_at": occurred_at}
     ).encode()
-
-
-@pytest.fixture
-def committed(engine: Engine) -> Iterator[sessionmaker[Session]]:
-    """Committing sessions on the suite's shared database, emptied afterwards as
-    ``committed_app`` does: every other test there finds it empty at rest (each rolls back),
-    and one counts every raw event it sees."""
-    from service.models import metadata
-
-    yield sessionmaker(engine, expire_on_commit=False)
-    with engine.begin() as connection:
-        for table in reversed(metadata.sorted_tables):
-            connection.execute(table.delete())
-    device_cache().invalidate()  # the keys looked up here name devices that are gone
 
 
 def test_a_batch_of_several_devices_is_stored_once_with_its_receive_times(
