@@ -25,6 +25,7 @@ import threading
 import time
 import uuid
 from concurrent.futures import ThreadPoolExecutor
+from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import Any
 
@@ -70,13 +71,17 @@ def _events(
 ) -> list[tuple[str, str, bytes]]:
     """``count`` messages spread over the devices: heartbeats only (``mix="heartbeat"``), or
     axle counts with every fifth a heartbeat (``"mixed"``)."""
+    # Dated now, as devices with a right clock date them: over MQTT the event's own time
+    # bounds its receive time (liveness), so a date long past would spare the bench the
+    # liveness writes a real device costs.
+    now = datetime.now(UTC)
     out = []
     for n in range(count):
         device, key = devices[n % len(devices)]
-        seconds = n // len(devices)
+        at = now + timedelta(microseconds=n)
         event: dict[str, Any] = {
             "event_id": f"{tag}-{n}",
-            "occurred_at": f"2026-11-23T06:{seconds // 60 % 60:02d}:{seconds % 60:02d}Z",
+            "occurred_at": at.isoformat().replace("+00:00", "Z"),
         }
         if mix == "heartbeat" or n % 5 == 4:
             event["kind"] = "heartbeat"
