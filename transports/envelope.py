@@ -130,7 +130,10 @@ def devices_for_keys(session: Session, keys: set[str]) -> dict[str, Device]:
     found = {key: device for key in keys if (device := cache.peek(key)) is not None}
     digests = {hash_secret(key): key for key in keys - found.keys()}
     if digests:
-        for device in session.scalars(select(Device).where(Device.key_hash.in_(digests))):
+        looked_up = list(session.scalars(select(Device).where(Device.key_hash.in_(digests))))
+        # kept for the next batches (the cache's TTL bounds how late a new key or a
+        # decommissioning is seen, as over HTTP): else every batch asks for every key again
+        for device in cache.remember(looked_up):
             found[digests[device.key_hash or ""]] = device
     return found
 
