@@ -79,18 +79,29 @@ class DeviceKeyCache:
         if device is None:
             self._entries.pop(digest, None)
             return None
-        copy = Device(
-            id=device.id,
-            station=device.station,
-            section=device.section,
-            kind=device.kind,
-            key_hash=device.key_hash,
-            decommissioned_at=device.decommissioned_at,
-        )
+        return self.remember([device], now)[0]
+
+    def remember(self, devices: list[Device], now: float | None = None) -> list[Device]:
+        """Keep detached copies of ``devices`` just read from the database (by key hash, for
+        ``ttl_s``): a caller that looks many keys up with one query fills the cache too."""
+        now = self._clock() if now is None else now
+        copies = [
+            Device(
+                id=device.id,
+                station=device.station,
+                section=device.section,
+                kind=device.kind,
+                key_hash=device.key_hash,
+                decommissioned_at=device.decommissioned_at,
+            )
+            for device in devices
+        ]
         if self.ttl_s > 0:
             with self._lock:
-                self._entries[digest] = (now, copy)
-        return copy
+                for copy in copies:
+                    if copy.key_hash:
+                        self._entries[copy.key_hash] = (now, copy)
+        return copies
 
     def peek(self, key: str) -> Device | None:
         """The cached device of ``key`` while its entry is fresh, without touching a database

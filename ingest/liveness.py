@@ -3,8 +3,11 @@
 Liveness is judged by the times the server *received* a device's events (protocol.md), never
 by the device's own ``occurred_at``: a device clock set to 2030 cannot keep itself alive, and
 one running hours behind is not silent while it talks. (The device's times still order its
-evidence.) A device is **stale** when nothing from it was received within ``DEPOT_HEARTBEAT_S``;
-a decommissioned device is not expected to speak, so it is never stale (:func:`is_stale`).
+evidence.) Over MQTT, which carries no broker time, the receive time is the bridge's read
+bounded by the event's own time (``ingest.multi_store``): there the clock can make a device
+look silent, never alive. A device is **stale** when nothing from it was received within
+``DEPOT_HEARTBEAT_S``; a decommissioned device is not expected to speak, so it is never stale
+(:func:`is_stale`).
 
 ``last_seen_at`` is written at most once per granularity step, without a read. The rule (the
 same live and on replay): an event moves ``last_seen_at`` to its ``received_at`` when that is

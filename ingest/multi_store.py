@@ -10,6 +10,9 @@ stored; a repeat is answered as the original; another event under a used id is 4
 A transport may also say when it received each item (``received_at``): JetStream gives the
 instant the stream stored a message, so a backlog in the broker does not make a silent device
 look alive later than it spoke. Without it an item is received when it is stored (now).
+MQTT only knows when the bridge *read* a message, which after a backlog is long after the
+broker got it: such a time (``received_is_read``) is bounded by the event's own
+``occurred_at`` too, so the backlog cannot keep a silent device alive (see ``_received``).
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ class DeviceBatch:
     device: Device
     items: list[Any]
     received_at: list[datetime | None] | None = field(default=None)
+    # The times are when a bridge read the items, not when the broker got them (MQTT).
+    received_is_read: bool = False
 
     def received(self, index: int) -> datetime | None:
         return None if self.received_at is None else self.received_at[index]
@@ -57,11 +62,26 @@ def _validate(
     return [(b, index, event, item) for index, event, item in accepted]
 
 
+def _received(batch: DeviceBatch, index: int, event: Any, now: datetime) -> datetime:
+    """When the item counts as received (its ``received_at``, which liveness counts from).
+
+    Never later than now. A read time may be long after the broker got the message (a bridge
+    restarted on a backlog): it is bounded by the event's own time as well, so a device that
+    went silent does not look alive until the backlog was read. The device's clock can only
+    make that earlier, never later than the read: one set ahead (at most
+    ``DEPOT_MAX_CLOCK_SKEW_S``, beyond that the event is refused) counts from the read, one
+    set far back makes its device look silent (a person must look), never alive."""
+    received = batch.received(index)
+    if received is None:
+        return now
+    if batch.received_is_read:
+        received = min(received, event.occurred_at)
+    return min(received, now)
+
+
 def _row(batch: DeviceBatch, index: int, event: Any, body: Result, transport: str) -> Result:
     values = raw_values(batch.device, event, body, answer=answer_now(event), transport=transport)
-    received = batch.received(index)
-    if received is not None:
-        values["received_at"] = min(received, values["received_at"])  # never in the future
+    values["received_at"] = _received(batch, index, event, values["received_at"])
     return values
 
 

@@ -29,11 +29,12 @@ from core.errors import (
     Unprocessable,
 )
 from core.models import Device
-from ingest.batches import batch_events
+from ingest.batches import MAX_EVENTS, batch_events
 from ingest.multi_store import DeviceBatch, accept_batches
 from ingest.payload import read_json
 
 log = logging.getLogger("depot.transports")
+MAX_IDS = MAX_EVENTS  # a refused batch names at most as many event ids as a batch may hold
 
 # The database failed: nothing of the batch is committed, so nothing may be acknowledged.
 DATABASE_DOWN = (OperationalError, InterfaceError, PendingRollbackError)
@@ -51,12 +52,15 @@ class Message:
 
     ``received_at``: when the transport received it (JetStream: when the stream stored it;
     MQTT: when the bridge read it), the events' receive time for liveness; None: when stored.
+    ``received_is_read``: ``received_at`` is only when the bridge read it (MQTT), maybe long
+    after the broker got it; each event's receive time is then at most its own occurred_at.
     """
 
     device_id: str
     key: str | None
     payload: bytes
     received_at: datetime | None = None
+    received_is_read: bool = False
 
 
 @dataclass(frozen=True)
@@ -71,7 +75,7 @@ class Answer:
         return json.dumps({**self.body, "http_status": self.status}, default=str).encode()
 
 
-def _problem(exc: DepotError, event_id: Any = None) -> dict[str, Any]:
+def _problem(exc: DepotError, names: Mapping[str, Any]) -> dict[str, Any]:
     body: dict[str, Any] = {
         "type": "about:blank",
         "title": exc.title,
@@ -80,9 +84,36 @@ def _problem(exc: DepotError, event_id: Any = None) -> dict[str, Any]:
     }
     if exc.errors is not None:
         body["errors"] = exc.errors
-    if isinstance(event_id, str):
-        body["event_id"] = event_id  # so a device can tell which of its messages was refused
-    return body
+    return {**body, **names}
+
+
+def _ids(payload: Any) -> dict[str, Any]:
+    """The event ids a payload names, so that a device can tell which message an answer is
+    for: ``event_id`` of one event, ``event_ids`` (one per item, None where unreadable) of a
+    batch; nothing when it names none."""
+    if not isinstance(payload, dict):
+        return {}
+    events = payload.get("events")
+    if isinstance(events, list):
+        return {"event_ids": [_event_id(item) for item in events[:MAX_IDS]]}
+    event_id = _event_id(payload)
+    return {} if event_id is None else {"event_id": event_id}
+
+
+def _names(message: Message, payload: Any, max_bytes: int, exc: DepotError) -> dict[str, Any]:
+    """The device and event ids a refusal names. A message refused for its key was never
+    read: it is read here (bounded by ``max_bytes``, nothing of it is believed or stored) only
+    to name its event ids, so the device can match the refusal to what it sent."""
+    if payload is None and isinstance(exc, Unauthorized):
+        try:
+            payload = decode(message.payload, max_bytes)
+        except DepotError:
+            payload = None
+    return {"device": message.device_id, **_ids(payload)}
+
+
+def _refusal(exc: DepotError, message: Message, payload: Any, max_bytes: int) -> Answer:
+    return Answer(exc.status, _problem(exc, _names(message, payload, max_bytes, exc)))
 
 
 def decode(data: bytes, max_bytes: int) -> Any:
@@ -99,7 +130,10 @@ def devices_for_keys(session: Session, keys: set[str]) -> dict[str, Device]:
     found = {key: device for key in keys if (device := cache.peek(key)) is not None}
     digests = {hash_secret(key): key for key in keys - found.keys()}
     if digests:
-        for device in session.scalars(select(Device).where(Device.key_hash.in_(digests))):
+        looked_up = list(session.scalars(select(Device).where(Device.key_hash.in_(digests))))
+        # kept for the next batches (the cache's TTL bounds how late a new key or a
+        # decommissioning is seen, as over HTTP): else every batch asks for every key again
+        for device in cache.remember(looked_up):
             found[digests[device.key_hash or ""]] = device
     return found
 
@@ -127,18 +161,22 @@ def authenticate(
 
 
 def accept(
-    session: Session, device: Device, payload: Any, transport: str, received: datetime | None
+    session: Session, device: Device, payload: Any, transport: str, message: Message
 ) -> Answer:
     """One payload, single event or batch, answered as ``POST /events`` answers it."""
     events = batch_events(payload)
     items = [payload] if events is None else events
-    batch = DeviceBatch(device, items, [received] * len(items))
+    received: list[datetime | None] = [message.received_at] * len(items)
+    batch = DeviceBatch(device, items, received, message.received_is_read)
     (results,) = accept_batches(session, [batch], transport=transport)
-    return _item_answer(results[0]) if events is None else Answer(200, {"results": results})
+    if events is None:
+        return _item_answer(results[0], device.id)
+    return Answer(200, {"results": results})
 
 
-def _event_id(payload: Any) -> Any:
-    return payload.get("event_id") if isinstance(payload, dict) else None
+def _event_id(payload: Any) -> str | None:
+    event_id = payload.get("event_id") if isinstance(payload, dict) else None
+    return event_id if isinstance(event_id, str) else None
 
 
 def _handle(session: Session, message: Message, transport: str, max_bytes: int) -> Answer:
@@ -148,18 +186,20 @@ def _handle(session: Session, message: Message, transport: str, max_bytes: int) 
         with session.begin_nested():
             device = authenticate(session, message)
             payload = decode(message.payload, max_bytes)
-            answer = accept(session, device, payload, transport, message.received_at)
+            answer = accept(session, device, payload, transport, message)
         return answer
     except DepotError as exc:
-        return Answer(exc.status, _problem(exc, _event_id(payload)))
+        return _refusal(exc, message, payload, max_bytes)
     except DataError:  # a NUL character or an out-of-range number, as in the HTTP app
-        return Answer(422, _problem(Unprocessable("a value cannot be stored or looked up")))
+        refused = Unprocessable("a value cannot be stored or looked up")
+        return _refusal(refused, message, payload, max_bytes)
     except DATABASE_DOWN:
         raise
     except Exception as exc:
         log.exception("message from %s failed", message.device_id)
         failure = InternalError(f"the message could not be handled ({type(exc).__name__})")
-        return Answer(500, _problem(failure), retry=True)
+        answer = _refusal(failure, message, payload, max_bytes)
+        return Answer(answer.status, answer.body, retry=True)
 
 
 @dataclass(frozen=True)
@@ -169,17 +209,18 @@ class _Part:
     index: int
     events: list[Any]
     batch: bool  # sent as {"events": [...]}: answered with "results", as POST /events
-    received_at: datetime | None
+    message: Message
 
 
-def _item_answer(item: dict[str, Any]) -> Answer:
-    """The single-event answer of a batch item (what ``accept_event`` answers for it)."""
+def _item_answer(item: dict[str, Any], device_id: str) -> Answer:
+    """The single-event answer of a batch item (what ``accept_event`` answers for it); a
+    refusal names the device and, when it has one, the event."""
     if item["status"] == "created":
         return Answer(201, item["result"])
     if item["status"] == "duplicate":
         return Answer(200, item["result"])
     error = item["error"]
-    body: dict[str, Any] = {"type": "about:blank", **error}
+    body: dict[str, Any] = {"type": "about:blank", **error, "device": device_id}
     if isinstance(item.get("event_id"), str):
         body["event_id"] = item["event_id"]
     return Answer(int(error["status"]), body)
@@ -202,11 +243,9 @@ def _sorted_parts(
             payload = decode(message.payload, max_bytes)
             events = batch_events(payload)
         except DepotError as exc:
-            answers[index] = Answer(exc.status, _problem(exc, _event_id(payload)))
+            answers[index] = _refusal(exc, message, payload, max_bytes)
             continue
-        part = _Part(
-            index, [payload] if events is None else events, events is not None, message.received_at
-        )
+        part = _Part(index, [payload] if events is None else events, events is not None, message)
         parts.setdefault(device.id, (device, []))[1].append(part)
     order = sorted(parts, key=lambda d: (parts[d][0].section or "", d))
     return {d: parts[d] for d in order}
@@ -224,17 +263,19 @@ def _grouped(
         DeviceBatch(
             device,
             [event for part in parts for event in part.events],
-            [part.received_at for part in parts for _ in part.events],
+            [part.message.received_at for part in parts for _ in part.events],
+            # one bridge's messages all alike; were they not, bounding them all is the safe side
+            any(part.message.received_is_read for part in parts),
         )
         for device, parts in by_device
     ]
     stored = accept_batches(session, batches, transport=transport)
-    for (_, parts), results in zip(by_device, stored, strict=True):
+    for (device, parts), results in zip(by_device, stored, strict=True):
         at = 0
         for part in parts:
             mine, at = results[at : at + len(part.events)], at + len(part.events)
             answers[part.index] = (
-                Answer(200, {"results": mine}) if part.batch else _item_answer(mine[0])
+                Answer(200, {"results": mine}) if part.batch else _item_answer(mine[0], device.id)
             )
     return [a for a in answers if a is not None]
 

@@ -9,8 +9,9 @@ before that gets the message again when it comes back, and idempotency drops the
 Three threads: paho's network thread queues what arrives; the main thread stores a batch
 (one transaction for all its devices) and hands the committed batch to the answer thread,
 which publishes each answer and then acknowledges its message while the next batch is stored.
-The events' receive time is when the network thread read them (MQTT tells nothing of when the
-broker got a message).
+MQTT tells nothing of when the broker got a message: an event's receive time (which liveness
+counts from) is when the network thread read it, bounded by the event's own ``occurred_at``,
+so that a backlog read after a restart does not make a silent device look alive.
 """
 
 from __future__ import annotations
@@ -136,8 +137,11 @@ class Bridge:
                 mid=msg.mid,
                 qos=msg.qos,
                 connection=self.connection,
-                # MQTT says nothing of when the broker got it: the read is the receive time
-                message=Message(device_id, key, bytes(msg.payload), received_at=utcnow()),
+                # MQTT says nothing of when the broker got it: the read bounds the receive
+                # time, the event's own occurred_at bounds it too (a backlog read late)
+                message=Message(
+                    device_id, key, bytes(msg.payload), received_at=utcnow(), received_is_read=True
+                ),
                 correlation=getattr(properties, "CorrelationData", None),
             )
         )

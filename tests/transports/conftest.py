@@ -11,7 +11,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from sqlalchemy import Engine
+from sqlalchemy.orm import Session, sessionmaker
 
+from core.auth import device_cache
 from tests.reliability.conftest import ADMIN_HEADERS
 from tests.reliability.loadgen import Device, Payloads, build_line
 from tests.reliability.relkit import Server, depot_env, scratch_database
@@ -89,3 +92,17 @@ def line(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Line]:
 @pytest.fixture(scope="package")
 def payloads() -> Payloads:
     return Payloads()
+
+
+@pytest.fixture
+def committed(engine: Engine) -> Iterator[sessionmaker[Session]]:
+    """Committing sessions on the suite's shared database, emptied afterwards as
+    ``committed_app`` does: every other test there finds it empty at rest (each rolls back),
+    and one counts every raw event it sees."""
+    from service.models import metadata
+
+    yield sessionmaker(engine, expire_on_commit=False)
+    with engine.begin() as connection:
+        for table in reversed(metadata.sorted_tables):
+            connection.execute(table.delete())
+    device_cache().invalidate()  # the keys looked up here name devices that are gone

@@ -54,10 +54,24 @@ def _cases(line: Line, transport: str) -> list[tuple[str, str | None, bytes, int
         ("not JSON", key, b"\x00{heartbeat", 422),
         ("unknown kind", key, json.dumps(_event(f"bad-{transport}-u", kind="tea")).encode(), 422),
         ("kind not allowed", key, json.dumps(departed).encode(), 403),
+        ("invalid field", key,
+         json.dumps(_event(f"bad-{transport}-f", occurred_at="soon")).encode(), 422),
         ("too large", key, b'{"pad": "' + b"x" * MAX_BODY_BYTES + b'"}', 413),
         ("batch", key, json.dumps({"events": [_event(f"bad-{transport}-b1"),
                                               _event(f"bad-{transport}-ok")]}).encode(), 200),
     ]  # fmt: skip
+
+
+def _named(transport: str) -> dict[str, str]:
+    """The event id each refusal must name (its payload is JSON with one), by case."""
+    return {
+        "same event_id, other body": f"bad-{transport}-ok",
+        "another device's key": f"bad-{transport}-k",
+        "no key": f"bad-{transport}-nokey",
+        "unknown kind": f"bad-{transport}-u",
+        "kind not allowed": f"bad-{transport}-dep",
+        "invalid field": f"bad-{transport}-f",
+    }
 
 
 def _stored(line: Line, transport: str) -> dict[str, str]:
@@ -80,6 +94,9 @@ def test_bad_messages_are_answered_acknowledged_and_not_stored(line: Line, trans
         assert answer["http_status"] == status, f"{what}: {answer}"
         if status >= 400:
             assert answer["status"] == status and answer["detail"], f"{what}: {answer}"
+            # the device matches the refusal to its message by these
+            assert answer["device"] == SENDER, f"{what}: {answer}"
+            assert answer.get("event_id") == _named(transport).get(what), f"{what}: {answer}"
     batch = answer["results"]
     assert [r["status"] for r in batch] == ["created", "duplicate"]
     # Only the two new events were stored, each marked with the transport it came by.

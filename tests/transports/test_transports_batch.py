@@ -151,3 +151,51 @@ def test_decommissioned_device_is_refused_as_over_http(
     (answer,) = handle_batch(sessions, [message], transport="mqtt", max_bytes=LIMIT)
     assert answer.status == 401 and answer.body["detail"], answer.body  # its key was replaced
     assert _stored(line, "bad-decom-%") == ["bad-decom-1"]
+
+
+def _refusals(line: Line) -> list[tuple[Message, int, dict[str, Any]]]:
+    """(message, http_status, what the refusal must name) for every refusal whose payload can
+    be read far enough to name its event; what cannot be read names the device alone."""
+    key, other = _keys(line)[SENDER], _keys(line)[OTHER]
+    batch = json.dumps({"events": [json.loads(_heartbeat("ids-b1")), {"kind": "heartbeat"}]})
+    return [
+        (Message(SENDER, other, _heartbeat("ids-wrongkey")), 401, {"event_id": "ids-wrongkey"}),
+        (Message(SENDER, None, _heartbeat("ids-nokey")), 401, {"event_id": "ids-nokey"}),
+        (Message(SENDER, key, _heartbeat("ids-tea", kind="tea")), 422, {"event_id": "ids-tea"}),
+        (Message(SENDER, key, _heartbeat("ids-when", occurred_at="soon")), 422,
+         {"event_id": "ids-when"}),
+        (Message(SENDER, key, _heartbeat("ids-extra", colour="red")), 422,
+         {"event_id": "ids-extra"}),
+        (Message(SENDER, other, batch.encode()), 401, {"event_ids": ["ids-b1", None]}),
+        (Message(SENDER, key, b"{not json"), 422, {}),
+        (Message(SENDER, key, b'{"pad": "' + b"x" * LIMIT + b'"}'), 413, {}),
+    ]  # fmt: skip
+
+
+@pytest.mark.parametrize("path", ["together", "one by one"])
+def test_refusals_name_the_event_and_the_device_when_readable(
+    line: Line,
+    sessions: sessionmaker[Session],
+    monkeypatch: pytest.MonkeyPatch,
+    caplog: pytest.LogCaptureFixture,
+    path: str,
+) -> None:
+    """A device matches an answer to its message by event_id: every refusal names it when the
+    payload is JSON with one (a wrong key too), and names the device, on either path."""
+    if path == "one by one":
+
+        def failing(*_: Any, **__: Any) -> Any:
+            raise ValueError("the batch fails together")
+
+        monkeypatch.setattr(envelope, "_grouped", failing)
+    cases = _refusals(line)
+    answers = handle_batch(sessions, [m for m, _, _ in cases], transport="mqtt", max_bytes=LIMIT)
+    for (message, status, names), answer in zip(cases, answers, strict=True):
+        body = json.loads(answer.to_json())
+        assert body["http_status"] == status and body["detail"], body
+        assert body["device"] == message.device_id, body
+        for field in ("event_id", "event_ids"):
+            assert body.get(field) == names.get(field), (field, body)
+    assert _stored(line, "ids-%") == []
+    redone = "failed together" in caplog.text
+    assert redone == (path == "one by one"), caplog.text  # refusals alone never cost the batch

@@ -1,9 +1,13 @@
-"""A backlog in JetStream does not make a silent device look alive later than it spoke: the
-events' receive time is when the stream stored the message, not when a consumer got to it.
+"""A backlog in a broker does not make a silent device look alive later than it spoke.
 
-The consumer of this test's own stream is down while the device publishes; it starts a
-while later. The stored ``received_at`` (which liveness counts from) is the stream's time:
-no later than the publisher had the stream's acknowledgement.
+JetStream: the events' receive time is when the stream stored the message, not when a
+consumer got to it. The consumer of this test's own stream is down while the device
+publishes; it starts a while later. The stored ``received_at`` (which liveness counts from)
+is the stream's time: no later than the publisher had the stream's acknowledgement.
+
+MQTT carries no broker time: the bridge is down while the device (its clock right) publishes,
+and restarted a while later; the receive time is the bridge's read bounded by the event's own
+``occurred_at``, so again no later than the broker's PUBACK to the device.
 """
 
 from __future__ import annotations
@@ -63,3 +67,26 @@ def test_a_backlog_in_jetstream_keeps_the_time_the_stream_stored_it(
         late.stop()
         devices.delete_streams(prefix)
         devices.close()
+
+
+def test_a_backlog_in_mosquitto_read_after_a_restart_keeps_the_time_the_device_spoke(
+    line: Line,
+) -> None:
+    key = next(d.key for d in line.devices if d.id == SENDER)
+    line.bridge.stop()
+    try:
+        before = datetime.now(UTC)
+        body = {"event_id": "late-mqtt-1", "kind": "heartbeat",
+                "occurred_at": before.isoformat().replace("+00:00", "Z")}  # fmt: skip
+        line.mqtt.publish(SENDER, key, json.dumps(body).encode()).wait_for_publish(10)
+        stored_by = datetime.now(UTC)  # PUBACKed: the broker holds it for the bridge's session
+        time.sleep(BACKLOG_S)  # no bridge: the message waits in the session
+    finally:
+        line.bridge.start()
+    assert not line.answers.wait_for({(SENDER, "late-mqtt-1")}, within=60), "no answer came"
+    assert line.answers.by_key[(SENDER, "late-mqtt-1")] == [201]
+    received = _received_at(line, "late-mqtt-1").astimezone(UTC)
+    assert before <= received <= stored_by, (
+        f"received_at {received.isoformat()} is the bridge's late read, not when the device "
+        f"spoke (published between {before.isoformat()} and {stored_by.isoformat()})"
+    )
