@@ -151,8 +151,33 @@ def veil_level(image: NDArray[np.uint8], *, floor: float = 15.0, onset: float = 
     ``d`` less ``floor`` (those pixels are dark grey, not black), faded in from
     ``d = onset`` to ``2 * onset`` so that clear images are left as they are.
     """
-    dark = float(np.percentile(image.min(axis=2), 2))
+    dark = percentile_u8(channel_extreme(image, cv2.min), 2)
     return max(0.0, dark - floor) * ramp(dark, onset, 2 * onset)
+
+
+def channel_extreme(image: NDArray[np.uint8], op: Any) -> NDArray[np.uint8]:
+    """Per-pixel minimum (``op=cv2.min``) or maximum (``cv2.max``) over the 3 channels.
+
+    The same values as ``image.min(axis=2)``; numpy reduces a length-3 axis one
+    element at a time, OpenCV's element-wise ops are vectorised (about 20x faster)."""
+    b, g, r = cv2.split(image)
+    return np.asarray(op(op(b, g), r), dtype=np.uint8)
+
+
+def percentile_u8(values: NDArray[np.uint8], q: float) -> float:
+    """``np.percentile(values, q)`` (its default linear method, bit for bit) of a uint8
+    array, from a 256-bin histogram instead of a partition of all its values."""
+    counts = cv2.calcHist([np.ascontiguousarray(values)], [0], None, [256], [0, 256])
+    cum = np.cumsum(counts.ravel().astype(np.int64))
+    n = int(cum[-1])
+    position = (n - 1) * (q / 100)
+    lo = min(math.floor(position), n - 1)
+    gamma = position - lo
+    below = int(np.searchsorted(cum, lo, side="right"))
+    above = int(np.searchsorted(cum, min(lo + 1, n - 1), side="right"))
+    step = above - below
+    # numpy's lerp: from the nearer end, so that gamma near 1 rounds like numpy does.
+    return float(below + step * gamma) if gamma < 0.5 else float(above - step * (1 - gamma))
 
 
 def _subtract(image: NDArray[np.uint8], level: float) -> NDArray[np.uint8]:
@@ -180,7 +205,7 @@ def _not_in_valley(image: NDArray[np.uint8], sigma_px: float) -> NDArray[np.bool
 def _quality(smooth: NDArray[np.uint8], red_share: float) -> tuple[float, list[str]]:
     """How well a disc would show: exposure, contrast and red clutter in the region."""
     grey = cv2.cvtColor(smooth, cv2.COLOR_BGR2GRAY)
-    bright = float(np.percentile(smooth.max(axis=2), 90))
+    bright = percentile_u8(channel_extreme(smooth, cv2.max), 90)
     contrast = float(grey.std())
     q_exposure = ramp(bright, 20.0, 70.0, 254.0, 256.0)
     q_contrast = ramp(contrast, 4.0, 16.0)
