@@ -83,7 +83,7 @@ def _answer(result: tail_check.DetectionResult, truth: bool) -> dict[str, Any]:
     return {"truth": truth, **result.to_dict()}
 
 
-def collect(with_fast: bool) -> Answers:
+def collect(with_fast: bool, only: list[str] | None = None) -> Answers:
     """Every answer of the current code, keyed by ``set/path`` and item name."""
     out: Answers = {}
     runs: list[tuple[str, Callable[[str], Iterator[Item]], Callable[[Any], Any]]] = [
@@ -96,6 +96,8 @@ def collect(with_fast: bool) -> Answers:
         if with_fast:
             runs.append((f"{name}.jpg fast", _jpegs, tail_check.detect_snapshot))
     for key, items, fn in runs:
+        if only and not any(key.startswith(o) for o in only):
+            continue
         source = key.split(".")[0]
         out[key] = {n: _answer(fn(x), truth) for n, truth, x in items(source)}
         print(f"  {key}: {len(out[key])} answers", flush=True)
@@ -150,10 +152,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("mode", choices=("record", "compare"))
     parser.add_argument("file", type=Path)
     parser.add_argument("--no-fast", action="store_true", help="skip detect_snapshot")
+    parser.add_argument("--only", nargs="+", help="sets whose key starts so (e.g. A1080 real)")
     args = parser.parse_args(argv)
     os.environ.setdefault("DEPOT_TAIL_CACHE", "var/tail_cache")
     with_fast = not args.no_fast and hasattr(tail_check, "detect_snapshot")
-    answers = collect(with_fast)
+    answers = collect(with_fast, args.only)
     if args.mode == "record":
         args.file.write_text(json.dumps(answers), encoding="utf-8")
         return 0

@@ -31,8 +31,8 @@ __all__ = [
     "DiscCandidate",
     "Verdict",
     "check_image",
-    "decode_snapshot",
     "detect",
+    "detect_reduced",
 ]
 
 Verdict = Literal["present", "absent", "uncertain"]
@@ -135,11 +135,23 @@ def region_box(profile: CameraProfile, width: int, height: int) -> BBox:
     return left, top, max(1, right - left), max(1, bottom - top)
 
 
-def _working_crop(image: NDArray[np.uint8], box: BBox, scale: float) -> NDArray[np.uint8]:
+def _working_crop(
+    image: NDArray[np.uint8], box: BBox, scale: float, full_size: tuple[int, int]
+) -> NDArray[np.uint8]:
+    """The search region at the working scale. ``box`` and ``scale`` are in pixels of the
+    snapshot (``full_size``); ``image`` may be that snapshot decoded at a reduced size."""
     x, y, w, h = box
-    crop = image[y : y + h, x : x + w]
     size = (max(1, round(w * scale)), max(1, round(h * scale)))
-    interp = cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR
+    fx, fy = image.shape[1] / full_size[0], image.shape[0] / full_size[1]
+    if fx == 1 and fy == 1:
+        crop = image[y : y + h, x : x + w]
+        interp = cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR
+    else:
+        x0, y0 = int(math.floor(x * fx)), int(math.floor(y * fy))
+        x1, y1 = int(math.ceil((x + w) * fx)), int(math.ceil((y + h) * fy))
+        crop = image[y0 : max(y1, y0 + 1), x0 : max(x1, x0 + 1)]
+        shrink = size[0] < crop.shape[1] and size[1] < crop.shape[0]
+        interp = cv2.INTER_AREA if shrink else cv2.INTER_LINEAR
     return np.asarray(cv2.resize(crop, size, interpolation=interp), dtype=np.uint8)
 
 
@@ -313,11 +325,30 @@ def detect(image_bgr: NDArray[np.uint8], profile: CameraProfile | None = None) -
         If the image is not a BGR array of at least 16×16 pixels.
     """
     image = check_image(image_bgr)
+    return detect_reduced(image, profile, full_size=(image.shape[1], image.shape[0]))
+
+
+def detect_reduced(
+    image_bgr: NDArray[np.uint8],
+    profile: CameraProfile | None = None,
+    *,
+    full_size: tuple[int, int],
+) -> DetectionResult:
+    """:func:`detect` on a snapshot of ``full_size`` (width, height) decoded at a reduced
+    size (the JPEG decoder's DCT-domain reduction, see :mod:`tail_check.snapshot`).
+
+    Boxes, sizes and the search region are reported in pixels of the full snapshot. The
+    working image is the same size as from the full image; it only comes from fewer
+    pixels. With ``full_size`` equal to the image's own size this is :func:`detect`.
+    """
+    image = check_image(image_bgr)
     p = profile if profile is not None else DEFAULT_PROFILE
-    height, width = image.shape[:2]
+    width, height = int(full_size[0]), int(full_size[1])
+    if width < image.shape[1] or height < image.shape[0]:
+        raise ValueError(f"full_size {full_size} is smaller than the image {image.shape[1::-1]}")
     box = region_box(p, width, height)
     scale = WORK_SIDE / math.sqrt(width * height)
-    work = _working_crop(image, box, scale)
+    work = _working_crop(image, box, scale, (width, height))
     sigma_px = p.sigma * WORK_SIDE
     smooth = work
     if sigma_px >= 0.3:
@@ -347,38 +378,3 @@ def detect(image_bgr: NDArray[np.uint8], profile: CameraProfile | None = None) -
         candidates=tuple(candidates),
         reasons=tuple(reasons),
     )
-
-
-_REDUCED = {
-    1: cv2.IMREAD_COLOR,
-    2: cv2.IMREAD_REDUCED_COLOR_2,
-    4: cv2.IMREAD_REDUCED_COLOR_4,
-    8: cv2.IMREAD_REDUCED_COLOR_8,
-}
-
-
-def decode_snapshot(data: bytes, *, reduce: int = 1) -> NDArray[np.uint8]:
-    """Decode JPEG/PNG bytes to a BGR array.
-
-    Parameters
-    ----------
-    data : bytes
-        The encoded image.
-    reduce : {1, 2, 4, 8}
-        Let the JPEG decoder downscale by this factor in the DCT domain (much faster
-        for large snapshots; the detector resamples to its working scale anyway, so
-        use it while ``sqrt(W*H) / reduce`` stays above ``WORK_SIDE``).
-
-    Raises
-    ------
-    ValueError
-        If the bytes are not a decodable image or ``reduce`` is not 1, 2, 4 or 8.
-    """
-    if reduce not in _REDUCED:
-        raise ValueError(f"reduce must be 1, 2, 4 or 8, got {reduce}")
-    if not data:
-        raise ValueError("empty image data")
-    image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), _REDUCED[reduce])
-    if image is None:
-        raise ValueError("image data is not a decodable JPEG or PNG")
-    return np.asarray(image, dtype=np.uint8)
