@@ -29,6 +29,9 @@ __all__ = [
 
 FilterKind = Literal["box", "disk", "gaussian"]
 FILTER_KINDS: tuple[FilterKind, ...] = ("box", "disk", "gaussian")
+TABLE_MIN_PIXELS = 20_000
+"""From this many pixels on, a uint8 image's band is found by lookup tables (the same mask;
+building the tables costs about as much as the float path on a 120x120 window)."""
 
 
 def filter_kernel(
@@ -135,7 +138,7 @@ def band_mask(
         raise ValueError(f"gain_range must satisfy 0 < k_min <= k_max, got {gain_range}")
     ref_bgr = np.array(reference_rgb[::-1], dtype=np.float32)
     half = np.float32(c_delta * float(np.mean(ref_bgr)))
-    if img.dtype == np.uint8:
+    if img.dtype == np.uint8 and img.shape[0] * img.shape[1] >= TABLE_MIN_PIXELS:
         return _band_mask_u8(img, ref_bgr, half, k_min, k_max)
     x = img.astype(np.float32, copy=False)
     # Feasible gains per channel: x/(r+Δ) <= k <= x/(r-Δ); the band holds if the

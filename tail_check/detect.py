@@ -192,10 +192,25 @@ def percentile_u8(values: NDArray[np.uint8], q: float) -> float:
     return float(below + step * gamma) if gamma < 0.5 else float(above - step * (1 - gamma))
 
 
+def std_u8(values: NDArray[np.uint8]) -> float:
+    """Standard deviation (``values.std()``) of a uint8 array from its 256-bin histogram."""
+    counts = cv2.calcHist([np.ascontiguousarray(values)], [0], None, [256], [0, 256]).ravel()
+    counts = counts.astype(np.float64)
+    n = float(counts.sum())
+    mean = float(counts @ _LEVELS) / n
+    return math.sqrt(float(counts @ (_LEVELS - mean) ** 2) / n)
+
+
+_LEVELS = np.arange(256, dtype=np.float64)
+
+
 def _subtract(image: NDArray[np.uint8], level: float) -> NDArray[np.uint8]:
     if level <= 0:
         return image
     return np.asarray(cv2.subtract(image, np.full(3, level, np.float64)), dtype=np.uint8)
+
+
+_THREE_QUARTERS = np.array([(3 * v + 3) // 4 for v in range(256)], dtype=np.uint8)
 
 
 def _not_in_valley(image: NDArray[np.uint8], sigma_px: float) -> NDArray[np.bool_]:
@@ -211,14 +226,16 @@ def _not_in_valley(image: NDArray[np.uint8], sigma_px: float) -> NDArray[np.bool
     # Closing fills seams narrower than the kernel; a pixel well below its closing
     # lies in such a seam. Broad dark areas (a shaded disc) are not touched.
     closed = cv2.morphologyEx(red, cv2.MORPH_CLOSE, kernel)
-    return np.asarray(red.astype(np.float32) >= 0.75 * closed.astype(np.float32))
+    # red >= 0.75 * closed, in integers: red >= ceil(3 * closed / 4).
+    below = cv2.compare(red, cv2.LUT(closed, _THREE_QUARTERS), cv2.CMP_GE)
+    return np.asarray(cv2.min(below, 1), dtype=np.uint8).view(bool)
 
 
 def _quality(smooth: NDArray[np.uint8], red_share: float) -> tuple[float, list[str]]:
     """How well a disc would show: exposure, contrast and red clutter in the region."""
     grey = cv2.cvtColor(smooth, cv2.COLOR_BGR2GRAY)
     bright = percentile_u8(channel_extreme(smooth, cv2.max), 90)
-    contrast = float(grey.std())
+    contrast = std_u8(grey)
     q_exposure = ramp(bright, 20.0, 70.0, 254.0, 256.0)
     q_contrast = ramp(contrast, 4.0, 16.0)
     q_clutter = 1.0 - 0.6 * ramp(red_share, 0.08, 0.30)
@@ -368,7 +385,7 @@ def detect_reduced(
     verdict, score, reasons = _verdict(best, quality, notes, p)
     return DetectionResult(
         verdict=verdict,
-        score=float(np.clip(score, 0.0, 1.0)),
+        score=min(1.0, max(0.0, float(score))),
         bbox=best.bbox if best is not None and verdict != "absent" else None,
         pixel_fraction=accepted / (WORK_SIDE * WORK_SIDE),
         disc_score=best.score if best is not None else 0.0,

@@ -148,12 +148,14 @@ def _seeds(
     # Label an eroded mask so that 1-2 px bridges (a seam through the rim onto a red
     # body) do not join the disc to its surroundings.
     mask_u8 = mask.view(np.uint8)
-    n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
-        cv2.erode(mask_u8, _CROSS), 8, cv2.CV_16U, cv2.CCL_GRANA
-    )
     dmin, dmax = p.disc_diameter_range
     area_min = math.pi / 4 * (0.5 * dmin * work_side) ** 2
     area_max = math.pi / 4 * (1.3 * dmax * work_side) ** 2
+    if cv2.countNonZero(mask_u8) < area_min:  # no region can be large enough
+        return []
+    n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
+        cv2.erode(mask_u8, _CROSS), 8, cv2.CV_16U, cv2.CCL_GRANA
+    )
     areas = stats[1:, cv2.CC_STAT_AREA]
     keep = np.nonzero((areas >= area_min) & (areas <= area_max))[0] + 1
     keep = keep[np.argsort(-stats[keep, cv2.CC_STAT_AREA])][:MAX_CANDIDATES]

@@ -262,6 +262,8 @@ def _fit_cut(hull_img: NDArray[np.uint8], outline: NDArray[np.int32], pad: int) 
 
 def _hole_counts(holes: NDArray[np.bool_], area: float) -> tuple[int, int]:
     """Holes of more than 2 % and of more than 0.4 % of the area."""
+    if not holes.any():
+        return 0, 0
     n, _, stats, _ = cv2.connectedComponentsWithStats(holes.astype(np.uint8), connectivity=4)
     sizes = stats[1:, cv2.CC_STAT_AREA]
     return int(np.count_nonzero(sizes > 0.02 * area)), int(np.count_nonzero(sizes > 0.004 * area))
