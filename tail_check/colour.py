@@ -262,7 +262,7 @@ def surround_share(
     cx, cy, ax, ay = x + w / 2.0, y + h / 2.0, max(w / 2.0, 0.5), max(h / 2.0, 0.5)
     x0, x1 = max(0, int(cx - 1.7 * ax) - 1), min(band.shape[1], int(cx + 1.7 * ax) + 2)
     y0, y1 = max(0, int(cy - 1.7 * ay) - 1), min(band.shape[0], int(cy + 1.7 * ay) + 2)
-    yy, xx = np.mgrid[y0:y1, x0:x1]
+    yy, xx = np.ogrid[y0:y1, x0:x1]  # broadcast: the same values as a full grid
     rho = ((xx + 0.5 - cx) / ax) ** 2 + ((yy + 0.5 - cy) / ay) ** 2
     ring = (rho >= 1.25**2) & (rho <= 1.7**2)
     if not ring.any():

@@ -126,7 +126,7 @@ def _refine(
     x0, y0 = max(0, sx - pad), max(0, sy - pad)
     x1, y1 = min(smooth.shape[1], sx + sw + pad), min(smooth.shape[0], sy + sh + pad)
     window = smooth[y0:y1, x0:x1]
-    ref_bgr = np.median(smooth[sy : sy + sh, sx : sx + sw][seed], axis=0)
+    ref_bgr = _median_colour(smooth[sy : sy + sh, sx : sx + sw][seed])
     ref_rgb = (float(ref_bgr[2]), float(ref_bgr[1]), float(ref_bgr[0]))
     if sum(ref_rgb) < 3:
         return None
@@ -152,6 +152,16 @@ def _refine(
     band = np.zeros(smooth.shape[:2], bool)
     band[y0:y1, x0:x1] = local
     return region, (x0 + x, y0 + y), band
+
+
+def _median_colour(pixels: NDArray[np.uint8]) -> NDArray[np.float64]:
+    """Per-channel median of (N, 3) pixels, as ``np.median(pixels, axis=0)`` gives it."""
+    n = len(pixels)
+    half = n // 2
+    if n % 2:
+        return np.asarray(np.partition(pixels, half, axis=0)[half], dtype=np.float64)
+    part = np.partition(pixels, (half - 1, half), axis=0).astype(np.float64)
+    return np.asarray((part[half - 1] + part[half]) / 2.0, dtype=np.float64)
 
 
 def _place(
