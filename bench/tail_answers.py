@@ -139,7 +139,9 @@ def compare(before: Answers, after: Answers) -> int:
         print(f"{key:15s} before {confusion(old)}")
         print(f"{'':15s} after  {confusion(new)}   identical answers {same}/{len(new)}")
         for n in changed:
-            print(f"{'':17s}{n}: {old[n]['verdict']} -> {new[n]['verdict']} (truth {new[n]['truth']})")
+            print(
+                f"{'':17s}{n}: {old[n]['verdict']} -> {new[n]['verdict']} (truth {new[n]['truth']})"
+            )
         new_fp = _false_present(new) - _false_present(old)
         if new_fp or _correct(new) < _correct(old):
             print(f"{'':17s}WORSE: new false present {sorted(new_fp)}")

@@ -165,7 +165,11 @@ def _gain_tables(
 
 
 def _band_mask_u8(
-    img: NDArray[np.uint8], ref_bgr: NDArray[np.float32], half: np.float32, k_min: float, k_max: float
+    img: NDArray[np.uint8],
+    ref_bgr: NDArray[np.float32],
+    half: np.float32,
+    k_min: float,
+    k_max: float,
 ) -> NDArray[np.bool_]:
     """:func:`band_mask` of a uint8 image by lookup tables, with the same result.
 
@@ -192,9 +196,11 @@ def _band_mask_u8(
             first = np.searchsorted(high_d, lows[c], side="left")
             alone &= first <= 255  # no level of channel d reaches this lower bound
             thresholds.append((d, np.minimum(first, 255).astype(np.uint8)))
-        ok = cv2.bitwise_and(ok, cv2.LUT(channels[c], alone.astype(np.uint8) * np.uint8(255)))
+        on = cv2.LUT(channels[c], alone.astype(np.uint8) * np.uint8(255))
+        ok = np.asarray(cv2.bitwise_and(ok, on), dtype=np.uint8)
         for d, table in thresholds:
-            ok = cv2.bitwise_and(ok, cv2.compare(cv2.LUT(channels[c], table), channels[d], cv2.CMP_LE))
+            below = cv2.compare(cv2.LUT(channels[c], table), channels[d], cv2.CMP_LE)
+            ok = np.asarray(cv2.bitwise_and(ok, below), dtype=np.uint8)
     return np.asarray(cv2.min(ok, 1), dtype=np.uint8).view(bool)
 
 

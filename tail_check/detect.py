@@ -236,7 +236,7 @@ def _not_in_valley(image: NDArray[np.uint8], sigma_px: float) -> NDArray[np.bool
 
 def _quality(smooth: NDArray[np.uint8], red_share: float) -> tuple[float, list[str]]:
     """How well a disc would show: exposure, contrast and red clutter in the region."""
-    grey = cv2.cvtColor(smooth, cv2.COLOR_BGR2GRAY)
+    grey = np.asarray(cv2.cvtColor(smooth, cv2.COLOR_BGR2GRAY), dtype=np.uint8)
     bright = percentile_u8(channel_extreme(smooth, cv2.max), 90)
     contrast = std_u8(grey)
     q_exposure = ramp(bright, 20.0, 70.0, 254.0, 256.0)

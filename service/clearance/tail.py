@@ -70,7 +70,9 @@ def detect_stored(path: Path, content_type: str, profile: Any) -> dict[str, Any]
     return tail_check.detect(load_bgr(path), profile).to_dict()
 
 
-def _detection(device_id: str, sha256: str, path: Path, content_type: str, profile: Any) -> dict[str, Any]:
+def _detection(
+    device_id: str, sha256: str, path: Path, content_type: str, profile: Any
+) -> dict[str, Any]:
     """The single-camera detection: the prepared one when it was made with the same profile
     (the same image and profile give the same detection, so replay, which computes it, agrees),
     else computed now."""

@@ -19,7 +19,8 @@ import tail_check
 from tail_check import DEFAULT_PROFILE, decode_snapshot, detect, detect_snapshot
 from tail_check.colour import TABLE_MIN_PIXELS, band_mask
 from tail_check.detect import detect_reduced, percentile_u8, std_u8
-from tail_check.regions import _median_colour, label_areas, label_box, label_regions
+from tail_check.labels import label_areas, label_box, label_regions
+from tail_check.regions import _median_colour
 from tail_check.shape import median
 from tail_check.snapshot import ReducedDecode, jpeg_size, reduction_for
 from tail_check.synth import iter_snapshots
@@ -55,7 +56,9 @@ def test_uint8_band_is_the_float_band_on_every_colour() -> None:
     p = DEFAULT_PROFILE
     for c_delta in (p.c_delta, 1.4 * p.c_delta):
         fast = band_mask(every, p.reference_rgb, c_delta, gain_range=p.gain_range)
-        plain = band_mask(every.astype(np.float32), p.reference_rgb, c_delta, gain_range=p.gain_range)
+        plain = band_mask(
+            every.astype(np.float32), p.reference_rgb, c_delta, gain_range=p.gain_range
+        )
         assert fast.dtype == np.bool_ and np.array_equal(fast, plain)
         assert 0 < np.count_nonzero(fast) < fast.size
 
