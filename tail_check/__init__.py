@@ -13,15 +13,17 @@ Public API::
     calibrate(image_bgr, (x, y)) -> CameraProfile
     render_overlay(image_bgr, result, profile=None) -> BGR array; overlay_png(...) -> bytes
     decode_snapshot(data) -> BGR array
+    detect_snapshot(jpeg_bytes, profile=None) -> DetectionResult (JPEG decoded at reduced size)
     CameraProfile, DEFAULT_PROFILE, load_profile
 """
 
 from .calibrate import calibrate
 from .compare import Comparison, compare, compare_with_departure
-from .detect import WORK_SIDE, DetectionResult, Verdict, decode_snapshot, detect
+from .detect import WORK_SIDE, DetectionResult, Verdict, detect
 from .overlay import overlay_png, render_overlay
 from .profile import DEFAULT_PROFILE, CameraProfile, load_profile
 from .regions import DiscCandidate
+from .snapshot import decode_snapshot, detect_snapshot
 
 __all__ = [
     "DEFAULT_PROFILE",
@@ -36,6 +38,7 @@ __all__ = [
     "compare_with_departure",
     "decode_snapshot",
     "detect",
+    "detect_snapshot",
     "load_profile",
     "overlay_png",
     "render_overlay",

@@ -29,6 +29,9 @@ __all__ = [
 
 FilterKind = Literal["box", "disk", "gaussian"]
 FILTER_KINDS: tuple[FilterKind, ...] = ("box", "disk", "gaussian")
+TABLE_MIN_PIXELS = 20_000
+"""From this many pixels on, a uint8 image's band is found by lookup tables (the same mask;
+building the tables costs about as much as the float path on a 120x120 window)."""
 
 
 def filter_kernel(
@@ -135,6 +138,8 @@ def band_mask(
         raise ValueError(f"gain_range must satisfy 0 < k_min <= k_max, got {gain_range}")
     ref_bgr = np.array(reference_rgb[::-1], dtype=np.float32)
     half = np.float32(c_delta * float(np.mean(ref_bgr)))
+    if img.dtype == np.uint8 and img.shape[0] * img.shape[1] >= TABLE_MIN_PIXELS:
+        return _band_mask_u8(img, ref_bgr, half, k_min, k_max)
     x = img.astype(np.float32, copy=False)
     # Feasible gains per channel: x/(r+Δ) <= k <= x/(r-Δ); the band holds if the
     # intersection over the three channels meets [k_min, k_max].
@@ -146,6 +151,57 @@ def band_mask(
         if ref_bgr[c] > half:
             np.minimum(k_hi, channel * (1.0 / (ref_bgr[c] - half)), out=k_hi)
     return np.asarray(k_lo <= k_hi)
+
+
+def _gain_tables(
+    ref_bgr: NDArray[np.float32], half: np.float32
+) -> tuple[list[NDArray[np.float32]], list[NDArray[np.float32] | None]]:
+    """Per channel and level 0..255, the gain bounds ``x/(r+Δ)`` and ``x/(r-Δ)`` (None
+    where ``r <= Δ``: no upper bound), computed exactly as the float path does per pixel."""
+    levels = np.arange(256, dtype=np.float32)
+    lows = [levels * (1.0 / (ref_bgr[c] + half)) for c in range(3)]
+    highs = [levels * (1.0 / (ref_bgr[c] - half)) if ref_bgr[c] > half else None for c in range(3)]
+    return lows, highs
+
+
+def _band_mask_u8(
+    img: NDArray[np.uint8],
+    ref_bgr: NDArray[np.float32],
+    half: np.float32,
+    k_min: float,
+    k_max: float,
+) -> NDArray[np.bool_]:
+    """:func:`band_mask` of a uint8 image by lookup tables, with the same result.
+
+    ``max(k_min, lo_c) <= min(k_max, hi_d)`` holds iff every lower bound is below every
+    upper bound. A bound of one channel alone is a table of its level; a pair
+    ``lo_c(x_c) <= hi_d(x_d)`` is ``x_d >= T_cd[x_c]`` since ``hi_d`` grows with the
+    level, ``T_cd`` being the first level whose upper bound reaches ``lo_c(x_c)``. So the
+    band costs a few uint8 table look-ups and compares instead of float images.
+    """
+    lows, highs = _gain_tables(ref_bgr, half)
+    lo_limit, hi_limit = np.float32(k_min), np.float32(k_max)
+    channels = cv2.split(np.ascontiguousarray(img))
+    ok = np.full(img.shape[:2], 255, np.uint8)
+    for c in range(3):
+        alone = lows[c] <= hi_limit
+        high = highs[c]
+        if high is not None:
+            alone &= (lo_limit <= high) & (lows[c] <= high)
+        thresholds = []
+        for d in range(3):
+            high_d = highs[d]
+            if d == c or high_d is None:
+                continue
+            first = np.searchsorted(high_d, lows[c], side="left")
+            alone &= first <= 255  # no level of channel d reaches this lower bound
+            thresholds.append((d, np.minimum(first, 255).astype(np.uint8)))
+        on = cv2.LUT(channels[c], alone.astype(np.uint8) * np.uint8(255))
+        ok = np.asarray(cv2.bitwise_and(ok, on), dtype=np.uint8)
+        for d, table in thresholds:
+            below = cv2.compare(cv2.LUT(channels[c], table), channels[d], cv2.CMP_LE)
+            ok = np.asarray(cv2.bitwise_and(ok, below), dtype=np.uint8)
+    return np.asarray(cv2.min(ok, 1), dtype=np.uint8).view(bool)
 
 
 def _edge_colour(
@@ -212,7 +268,7 @@ def surround_share(
     cx, cy, ax, ay = x + w / 2.0, y + h / 2.0, max(w / 2.0, 0.5), max(h / 2.0, 0.5)
     x0, x1 = max(0, int(cx - 1.7 * ax) - 1), min(band.shape[1], int(cx + 1.7 * ax) + 2)
     y0, y1 = max(0, int(cy - 1.7 * ay) - 1), min(band.shape[0], int(cy + 1.7 * ay) + 2)
-    yy, xx = np.mgrid[y0:y1, x0:x1]
+    yy, xx = np.ogrid[y0:y1, x0:x1]  # broadcast: the same values as a full grid
     rho = ((xx + 0.5 - cx) / ax) ** 2 + ((yy + 0.5 - cy) / ay) ** 2
     ring = (rho >= 1.25**2) & (rho <= 1.7**2)
     if not ring.any():

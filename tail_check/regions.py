@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .colour import band_mask, occluder_continues, surround_share
+from .labels import label_areas, label_box, label_regions
 from .profile import CameraProfile
 from .shape import CUT_SOLIDITY, RegionShape, cut_members, measure_region, ramp
 
@@ -103,22 +104,20 @@ def _refine(
     x0, y0 = max(0, sx - pad), max(0, sy - pad)
     x1, y1 = min(smooth.shape[1], sx + sw + pad), min(smooth.shape[0], sy + sh + pad)
     window = smooth[y0:y1, x0:x1]
-    ref_bgr = np.median(smooth[sy : sy + sh, sx : sx + sw][seed], axis=0)
+    ref_bgr = _median_colour(smooth[sy : sy + sh, sx : sx + sw][seed])
     ref_rgb = (float(ref_bgr[2]), float(ref_bgr[1]), float(ref_bgr[0]))
     if sum(ref_rgb) < 3:
         return None
     local = band_mask(window, ref_rgb, c_delta, gain_range=_LOCAL_GAIN)
     local &= valley_free[y0:y1, x0:x1]
     local |= _place(seed, (sx - x0, sy - y0), local.shape)
-    n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
-        cv2.erode(local.view(np.uint8), _CROSS), 8, cv2.CV_16U, cv2.CCL_GRANA
-    )
+    _, labels = label_regions(np.asarray(cv2.erode(local.view(np.uint8), _CROSS), np.uint8))
     seed_labels = labels[sy - y0 : sy - y0 + sh, sx - x0 : sx - x0 + sw][seed]
     seed_labels = seed_labels[seed_labels > 0]
     if seed_labels.size == 0:
         return None
     label = int(np.bincount(seed_labels).argmax())
-    x, y, w, h = (int(v) for v in stats[label, :4])
+    x, y, w, h = label_box(labels, label)
     touches = (x == 0 and x0 > 0) or (y == 0 and y0 > 0)
     touches |= x + w >= local.shape[1] and x1 < smooth.shape[1]
     touches |= y + h >= local.shape[0] and y1 < smooth.shape[0]
@@ -131,6 +130,16 @@ def _refine(
     band = np.zeros(smooth.shape[:2], bool)
     band[y0:y1, x0:x1] = local
     return region, (x0 + x, y0 + y), band
+
+
+def _median_colour(pixels: NDArray[np.uint8]) -> NDArray[np.float64]:
+    """Per-channel median of (N, 3) pixels, as ``np.median(pixels, axis=0)`` gives it."""
+    n = len(pixels)
+    half = n // 2
+    if n % 2:
+        return np.asarray(np.partition(pixels, half, axis=0)[half], dtype=np.float64)
+    part = np.partition(pixels, (half - 1, half), axis=0).astype(np.float64)
+    return np.asarray((part[half - 1] + part[half]) / 2.0, dtype=np.float64)
 
 
 def _place(
@@ -148,18 +157,19 @@ def _seeds(
     # Label an eroded mask so that 1-2 px bridges (a seam through the rim onto a red
     # body) do not join the disc to its surroundings.
     mask_u8 = mask.view(np.uint8)
-    n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
-        cv2.erode(mask_u8, _CROSS), 8, cv2.CV_16U, cv2.CCL_GRANA
-    )
     dmin, dmax = p.disc_diameter_range
     area_min = math.pi / 4 * (0.5 * dmin * work_side) ** 2
     area_max = math.pi / 4 * (1.3 * dmax * work_side) ** 2
-    areas = stats[1:, cv2.CC_STAT_AREA]
+    if cv2.countNonZero(mask_u8) < area_min:  # no region can be large enough
+        return []
+    n, labels = label_regions(np.asarray(cv2.erode(mask_u8, _CROSS), np.uint8))
+    all_areas = label_areas(labels, n)
+    areas = all_areas[1:]
     keep = np.nonzero((areas >= area_min) & (areas <= area_max))[0] + 1
-    keep = keep[np.argsort(-stats[keep, cv2.CC_STAT_AREA])][:MAX_CANDIDATES]
+    keep = keep[np.argsort(-all_areas[keep])][:MAX_CANDIDATES]
     out = []
     for label in keep:
-        x, y, w, h = (int(v) for v in stats[label, :4])
+        x, y, w, h = label_box(labels, int(label))
         x, y = max(0, x - 1), max(0, y - 1)
         w, h = min(mask.shape[1] - x, w + 2), min(mask.shape[0] - y, h + 2)
         core = (labels[y : y + h, x : x + w] == label).view(np.uint8)

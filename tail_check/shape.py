@@ -125,6 +125,16 @@ def ramp(x: float, lo0: float, lo1: float, hi1: float = math.inf, hi0: float = m
     return 1.0
 
 
+def median(values: NDArray[np.floating]) -> float:
+    """``np.median`` of a 1-D array (the same value), without its generic machinery."""
+    n = len(values)
+    half = n // 2
+    if n % 2:
+        return float(np.partition(values, half)[half])
+    part = np.partition(values, (half - 1, half))
+    return float((part[half - 1] + part[half]) / 2.0)
+
+
 def _moment_ellipse(
     filled: NDArray[np.uint8], outline: NDArray[np.int32]
 ) -> tuple[NDArray[np.uint8], float]:
@@ -140,7 +150,7 @@ def _moment_ellipse(
     inv = np.linalg.inv(cov + np.eye(2) * 1e-9)
     rho = np.sqrt(np.einsum("ni,ij,nj->n", pts, inv, pts))
     # Normalised by the median: the digital outline runs half a pixel inside the edge.
-    residual = float(np.sqrt(np.mean((rho / max(float(np.median(rho)), 1e-9) - 1.0) ** 2)))
+    residual = float(np.sqrt(np.mean((rho / max(median(rho), 1e-9) - 1.0) ** 2)))
     evals = np.maximum(evals, 1e-6)
     # A uniform filled ellipse with semi-axis a has variance a²/4 along that axis.
     minor, major = 2.0 * math.sqrt(evals[0]), 2.0 * math.sqrt(evals[1])
@@ -262,8 +272,13 @@ def _fit_cut(hull_img: NDArray[np.uint8], outline: NDArray[np.int32], pad: int) 
 
 def _hole_counts(holes: NDArray[np.bool_], area: float) -> tuple[int, int]:
     """Holes of more than 2 % and of more than 0.4 % of the area."""
-    n, _, stats, _ = cv2.connectedComponentsWithStats(holes.astype(np.uint8), connectivity=4)
-    sizes = stats[1:, cv2.CC_STAT_AREA]
+    if not holes.any():
+        return 0, 0
+    # Only the sizes count, so plain labels and their histogram (no OpenCV statistics).
+    n, labels = cv2.connectedComponentsWithAlgorithm(
+        holes.view(np.uint8), 4, cv2.CV_16U, cv2.CCL_DEFAULT
+    )
+    sizes = cv2.calcHist([labels], [0], None, [n], [0, n]).ravel()[1:]
     return int(np.count_nonzero(sizes > 0.02 * area)), int(np.count_nonzero(sizes > 0.004 * area))
 
 

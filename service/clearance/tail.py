@@ -54,14 +54,25 @@ def prepare_snapshot(device: Any, event: Any) -> None:
     a worker thread, outside the transaction and the section lock (see ``ingest.handlers``)."""
     profile = camera_profile(device.id)
     path = stored_image(get_settings().image_dir, event.image_sha256, event.content_type)
-    detection = tail_check.detect(load_bgr(path), profile).to_dict()
+    detection = detect_stored(path, event.content_type, profile)
     with _prepared_lock:
         _prepared[(device.id, event.image_sha256)] = (profile, detection)
         while len(_prepared) > PREPARED_MAX:
             _prepared.popitem(last=False)
 
 
-def _detection(device_id: str, sha256: str, image: Any, profile: Any) -> dict[str, Any]:
+def detect_stored(path: Path, content_type: str, profile: Any) -> dict[str, Any]:
+    """The single-camera detection of a stored image. A JPEG is decoded at reduced size in the
+    DCT domain (``tail_check.detect_snapshot``: the detector works at a fixed scale of about
+    400 pixels, so most of a 1080p decode was thrown away); any other image in full."""
+    if content_type == "image/jpeg":
+        return tail_check.detect_snapshot(path.read_bytes(), profile).to_dict()
+    return tail_check.detect(load_bgr(path), profile).to_dict()
+
+
+def _detection(
+    device_id: str, sha256: str, path: Path, content_type: str, profile: Any
+) -> dict[str, Any]:
     """The single-camera detection: the prepared one when it was made with the same profile
     (the same image and profile give the same detection, so replay, which computes it, agrees),
     else computed now."""
@@ -69,7 +80,7 @@ def _detection(device_id: str, sha256: str, image: Any, profile: Any) -> dict[st
         prepared = _prepared.pop((device_id, sha256), None)
     if prepared is not None and prepared[0] == profile:
         return dict(prepared[1])
-    return tail_check.detect(image(), profile).to_dict()
+    return detect_stored(path, content_type, profile)
 
 
 install_preparer("tail_snapshot", prepare_snapshot)
@@ -88,7 +99,7 @@ def tail_snapshot(d: Derivation) -> dict[str, Any]:
     )
     profile = camera_profile(d.device.id)
     detection = _detection(
-        d.device.id, event.image_sha256, lambda: load_bgr(snapshot_file(row)), profile
+        d.device.id, event.image_sha256, snapshot_file(row), event.content_type, profile
     )
     # On an arrival image, the same run's departure image (if any) is the reference.
     run = run_at(d.session, event.section, event.occurred_at, d.device.station)

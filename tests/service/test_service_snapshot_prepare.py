@@ -35,10 +35,15 @@ def detections(monkeypatch: pytest.MonkeyPatch) -> list[bool]:
     calls: list[bool] = []
     storing = [False]
     detect, store_event = tail_check.detect, ingest.service.store_event
+    detect_snapshot = tail_check.detect_snapshot  # JPEGs: decoded at reduced size
 
     def counted(*args: Any, **kwargs: Any) -> Any:
         calls.append(storing[0])
         return detect(*args, **kwargs)
+
+    def counted_snapshot(*args: Any, **kwargs: Any) -> Any:
+        calls.append(storing[0])
+        return detect_snapshot(*args, **kwargs)
 
     def storing_event(*args: Any, **kwargs: Any) -> Any:
         storing[0] = True
@@ -48,6 +53,7 @@ def detections(monkeypatch: pytest.MonkeyPatch) -> list[bool]:
             storing[0] = False
 
     monkeypatch.setattr(tail_check, "detect", counted)
+    monkeypatch.setattr(tail_check, "detect_snapshot", counted_snapshot)
     monkeypatch.setattr(ingest.service, "store_event", storing_event)
     return calls
 

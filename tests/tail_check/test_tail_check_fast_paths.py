@@ -1,0 +1,206 @@
+"""The detector's fast paths answer as the plain computations they replace.
+
+Speed work (issue #11) must not change what the detector answers: the uint8 band,
+the histogram percentiles, the labelling without OpenCV statistics and the medians
+give the very values of the code they replaced; the reduced JPEG decode gives the same
+verdicts, boxes in the snapshot's own pixels, and finds the same smallest disc.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import cv2
+import numpy as np
+import pytest
+
+import tail_check
+from tail_check import DEFAULT_PROFILE, decode_snapshot, detect, detect_snapshot
+from tail_check.colour import TABLE_MIN_PIXELS, band_mask
+from tail_check.detect import detect_reduced, percentile_u8, std_u8
+from tail_check.labels import label_areas, label_box, label_regions
+from tail_check.regions import _median_colour
+from tail_check.shape import median
+from tail_check.snapshot import ReducedDecode, jpeg_size, reduction_for
+from tail_check.synth import iter_snapshots
+
+RNG = np.random.default_rng(11)
+
+
+def _jpeg(image: np.ndarray, quality: int = 90, *, progressive: bool = False) -> bytes:
+    params = [cv2.IMWRITE_JPEG_QUALITY, quality, cv2.IMWRITE_JPEG_PROGRESSIVE, int(progressive)]
+    ok, buf = cv2.imencode(".jpg", image, params)
+    assert ok
+    return bytes(buf.tobytes())
+
+
+def _iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
+    iw = max(0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
+    ih = max(0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
+    return iw * ih / (a[2] * a[3] + b[2] * b[3] - iw * ih)
+
+
+def test_histogram_percentile_and_std_are_numpys() -> None:
+    for _ in range(300):
+        h, w = (int(v) for v in RNG.integers(1, 200, 2))
+        values = RNG.integers(0, int(RNG.integers(1, 256)), (h, w), dtype=np.uint8)
+        for q in (0, 2, 50, 90, 100):
+            assert percentile_u8(values, q) == float(np.percentile(values, q))
+        assert std_u8(values) == pytest.approx(float(values.std()), rel=1e-12, abs=1e-12)
+
+
+def test_uint8_band_is_the_float_band_on_every_colour() -> None:
+    levels = np.arange(256, dtype=np.uint8)
+    every = np.stack(np.meshgrid(levels, levels, levels, indexing="ij"), -1).reshape(4096, 4096, 3)
+    p = DEFAULT_PROFILE
+    for c_delta in (p.c_delta, 1.4 * p.c_delta):
+        fast = band_mask(every, p.reference_rgb, c_delta, gain_range=p.gain_range)
+        plain = band_mask(
+            every.astype(np.float32), p.reference_rgb, c_delta, gain_range=p.gain_range
+        )
+        assert fast.dtype == np.bool_ and np.array_equal(fast, plain)
+        assert 0 < np.count_nonzero(fast) < fast.size
+
+
+def test_uint8_band_is_the_float_band_for_any_reference() -> None:
+    image = RNG.integers(0, 256, (150, 150, 3), dtype=np.uint8)  # above the table threshold
+    assert image.shape[0] * image.shape[1] >= TABLE_MIN_PIXELS
+    for _ in range(60):
+        ref = tuple(float(v) for v in RNG.uniform(0, 255, 3))
+        c_delta = float(RNG.choice([0.1, 0.25, 0.5, 1.0, 2.0]))
+        k = float(RNG.uniform(0.05, 2.0))
+        gains = (k, k * float(RNG.choice([1.0, 1.3, 4.0])))
+        fast = band_mask(image, ref, c_delta, gain_range=gains)  # type: ignore[arg-type]
+        plain = band_mask(image.astype(np.float32), ref, c_delta, gain_range=gains)  # type: ignore[arg-type]
+        assert np.array_equal(fast, plain)
+
+
+def test_labels_without_statistics_are_opencvs() -> None:
+    for _ in range(100):
+        h, w = (int(v) for v in RNG.integers(5, 200, 2))
+        noise = cv2.GaussianBlur(RNG.random((h, w)).astype(np.float32), (0, 0), 2.0)
+        mask = (noise > float(np.median(noise))).astype(np.uint8)
+        n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
+            mask, 8, cv2.CV_16U, cv2.CCL_GRANA
+        )
+        n2, labels2 = label_regions(mask)
+        assert n2 == n and np.array_equal(labels2, labels)
+        assert np.array_equal(label_areas(labels2, n2), stats[:, cv2.CC_STAT_AREA])
+        for label in range(1, n):
+            assert label_box(labels2, label) == tuple(int(v) for v in stats[label, :4])
+
+
+def test_medians_are_numpys() -> None:
+    for n in (1, 2, 3, 10, 11, 200):
+        values = RNG.random(n)
+        assert median(values) == float(np.median(values))
+        pixels = RNG.integers(0, 256, (n, 3), dtype=np.uint8)
+        assert np.array_equal(_median_colour(pixels), np.median(pixels, axis=0))
+
+
+def test_jpeg_size_is_read_from_the_header() -> None:
+    image = RNG.integers(0, 256, (75, 130, 3), dtype=np.uint8)
+    assert jpeg_size(_jpeg(image)) == (130, 75)
+    assert jpeg_size(_jpeg(image, progressive=True)) == (130, 75)
+    grey = _jpeg(image[..., 0].copy())
+    assert jpeg_size(grey) == (130, 75)
+    ok, png = cv2.imencode(".png", image)
+    assert ok
+    assert jpeg_size(png.tobytes()) is None
+    assert jpeg_size(b"") is None and jpeg_size(b"\xff\xd8\xff") is None
+    assert jpeg_size(b"\xff\xd8" + b"\x00" * 20) is None
+
+
+def test_reduction_keeps_a_decoded_pixel_per_working_pixel() -> None:
+    assert reduction_for((1920, 1080)) == 2
+    assert reduction_for((1280, 720)) == 2
+    assert reduction_for((800, 600)) == 1
+    assert reduction_for((640, 480)) == 1
+    assert reduction_for((4000, 3000)) == 8
+    assert reduction_for((1920, 1080), ReducedDecode(min_side=300.0)) == 4
+    assert reduction_for((1920, 1080), ReducedDecode(factors=())) == 1
+
+
+def test_reduced_decode_gives_the_same_verdicts_in_full_pixels() -> None:
+    seen = set()
+    for image, _label in iter_snapshots(31, 10, size=(1920, 1080)):
+        data = _jpeg(image)
+        plain = detect(decode_snapshot(data))
+        fast = detect_snapshot(data)
+        assert fast.verdict == plain.verdict
+        assert fast.image_size == (1920, 1080) and fast.search_region == plain.search_region
+        assert fast.score == pytest.approx(plain.score, abs=0.1)
+        if plain.bbox is not None:
+            assert fast.bbox is not None and _iou(fast.bbox, plain.bbox) > 0.8
+        seen.add(plain.verdict)
+    assert {"present", "absent"} <= seen
+
+
+def test_snapshots_that_cannot_be_reduced_are_decoded_in_full() -> None:
+    image, _ = next(iter_snapshots(32, 1, size=(640, 480)))
+    ok, png = cv2.imencode(".png", image)
+    assert ok
+    for data in (png.tobytes(), _jpeg(image)):
+        assert detect_snapshot(data) == detect(cv2.imdecode(np.frombuffer(data, np.uint8), 1))
+    with pytest.raises(ValueError, match="empty"):
+        detect_snapshot(b"")
+    with pytest.raises(ValueError, match="decodable"):
+        detect_snapshot(b"\xff\xd8 not a jpeg at all")
+
+
+def test_detect_reduced_refuses_a_full_size_below_the_image() -> None:
+    image = np.zeros((100, 100, 3), np.uint8)
+    with pytest.raises(ValueError, match="smaller"):
+        detect_reduced(image, full_size=(50, 100))
+    assert detect_reduced(image, full_size=(100, 100)) == detect(image)
+
+
+def _disc_scene(radius: float, body_bgr: tuple[int, int, int]) -> bytes:
+    """1920x1080: a car body, buffer beam, bracket and a red disc with a dark rim and a
+    brighter reflector centre."""
+    image = np.full((1080, 1920, 3), body_bgr, np.uint8)
+    image = cv2.add(image, RNG.integers(0, 12, image.shape, dtype=np.uint8))
+    cv2.rectangle(image, (600, 760), (1800, 860), (30, 30, 30), -1)
+    cx, cy = 1500, 760 - int(radius * 1.1)
+    cv2.rectangle(image, (cx - 2, cy), (cx + 3, 760), (25, 25, 25), -1)
+    cv2.circle(image, (cx, cy), round(radius), (20, 20, 20), -1, cv2.LINE_AA)
+    cv2.circle(image, (cx, cy), round(0.9 * radius), (38, 35, 200), -1, cv2.LINE_AA)
+    cv2.circle(image, (cx, cy), round(0.3 * radius), (70, 70, 235), -1, cv2.LINE_AA)
+    return _jpeg(cv2.GaussianBlur(image, (0, 0), 1.0))
+
+
+@pytest.mark.parametrize("body", [(60, 90, 70), (45, 40, 40)], ids=["green", "dark"])
+def test_the_reduced_decode_finds_the_same_smallest_disc(body: tuple[int, int, int]) -> None:
+    """Radius 2.2 % of the image height (24 px of 1080) is found by both paths; at every
+    radius down to 1.5 % both give the same verdict (the limit is the profile's disc
+    size range, not the decoded resolution)."""
+    for radius in (32, 24, 22, 20, 18, 16):
+        data = _disc_scene(radius, body)
+        plain, fast = detect(decode_snapshot(data)), detect_snapshot(data)
+        assert fast.verdict == plain.verdict, radius
+        if radius >= 24:
+            assert fast.verdict == "present", radius
+
+
+def test_reduced_path_is_faster_than_full_decode_and_detect() -> None:
+    """Best of several interleaved calls (the machine may be shared): the reduced path costs
+    clearly less than the full decode + detect it replaces."""
+    cv2.setNumThreads(1)
+    data = [_jpeg(image) for image, _ in iter_snapshots(77, 4, size=(1920, 1080))]
+    fast, plain = [], []
+    for _ in range(5):
+        for d in data:
+            t0 = time.perf_counter()
+            detect_snapshot(d)
+            t1 = time.perf_counter()
+            detect(decode_snapshot(d))
+            fast.append(t1 - t0)
+            plain.append(time.perf_counter() - t1)
+    assert sorted(fast)[len(fast) // 4] < 0.9 * sorted(plain)[len(plain) // 4]
+
+
+def test_public_api_names_the_fast_path() -> None:
+    assert tail_check.detect_snapshot is detect_snapshot
+    assert "detect_snapshot" in tail_check.__all__
+    assert sys.modules["tail_check.snapshot"].decode_snapshot is decode_snapshot
