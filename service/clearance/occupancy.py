@@ -111,18 +111,41 @@ def arriving_run(session: Session, section: Section, station: str, train: str) -
     return next((r for r in waiting if r.train == train), waiting[0] if waiting else None)
 
 
-def early_arrival(session: Session, run: Run) -> RawEvent | None:
-    """An arrival of this train that reached depot before its departure (nobody took it)."""
+def early_arrival(session: Session, run: Run, before: int) -> RawEvent | None:
+    """An arrival of this train that reached depot before its departure (derived before the
+    event ``before``, and nobody took it)."""
     used = select(Run.arrival_id).where(Run.section == run.section, Run.arrival_id.is_not(None))
     rows = session.scalars(
         select(RawEvent)
         .join(Device, Device.id == RawEvent.device_id)
         .where(RawEvent.kind == "train_arrived", RawEvent.section == run.section)
-        .where(RawEvent.id < run.id, RawEvent.occurred_at >= run.departed_at)
+        .where(RawEvent.id < before, RawEvent.occurred_at >= run.departed_at)
         .where(Device.station == run.to_station, RawEvent.id.not_in(used))
         .order_by(RawEvent.occurred_at, RawEvent.id)
     )
     return next((raw for raw in rows if raw.body.get("train") == run.train), None)
+
+
+def mistaken_arrival(session: Session, section: Section, run: Run) -> Run | None:
+    """An open run that an arrival of *this* train closed because this train's departure had
+    not reached depot yet (the arrival named this train number, not the run's), and that no
+    person has acted on: the arrival is this run's."""
+    runs = session.scalars(
+        select(Run)
+        .where(Run.section == section.id, Run.id != run.id, Run.arrival_train == run.train)
+        .where(Run.train != run.train, Run.arrived_at >= run.departed_at, Run.auto.is_(True))
+        .order_by(Run.arrived_at, Run.id)
+    )
+    return next((r for r in runs if is_open(r, section)), None)
+
+
+def reopen(run: Run) -> None:
+    """Take a mistaken arrival back from ``run``: it is in the section again, undecided."""
+    run.arrived_at = run.arrival_received_at = run.decided_at = None
+    run.arrival_train, run.arrival_id, run.verdict = None, None, None
+    run.reasons, run.evidence = [], {}
+    if run.status == "arrived":
+        run.status = "running"
 
 
 def overtaken(session: Session, run: Run) -> bool:

@@ -10,15 +10,15 @@ from sqlalchemy.orm import Session
 
 from core.auth import Principal
 from core.database import utcnow
-from core.errors import Conflict, NotFound
+from core.errors import NotFound
 from core.models import Section
 from core.schemas import format_instant
 from service.clearance import attribution, occupancy
 from service.clearance.attribution import run_at, side_of
 from service.clearance.evidence import gather
 from service.clearance.models import AuditRecord, Run
+from service.clearance.refusals import ACTION_STATES, check_action
 from service.clearance.rules import (
-    SWEEP_FROM,
     Decision,
     Verdict,
     decide,
@@ -30,8 +30,7 @@ from service.clearance.rules import (
 from service.clearance.sweeps import SYSTEM, record_sweep
 
 BUSY_STATES = ("occupied", "awaiting_confirmation", "review", "alarm", "blocked", "awaiting_sweep")
-ACTION_STATES = {"clear": "free", "keep_blocked": "blocked", "sweep": "awaiting_sweep"}
-__all__ = ["SYSTEM", "act", "attach", "close_run", "evaluate", "open_run"]
+__all__ = ["ACTION_STATES", "SYSTEM", "act", "attach", "close_run", "evaluate", "open_run"]
 
 
 LOCKED = "depot_locked_sections"
@@ -123,10 +122,31 @@ def open_run(
     if run.sweep:
         out.update(sweep=True, sweep_of=run.sweep_of)
     out["adopted_evidence"] = _take_evidence(session, run, section, received)
-    early = occupancy.early_arrival(session, run)
-    if early is not None:
-        out["arrival"] = _arrive(session, run, section, early, early.received_at)
+    arrival = _take_arrival(session, run, section)
+    if arrival is not None:
+        out["arrival"] = arrival
     return {**out, "section_state": section.state}
+
+
+def _take_arrival(session: Session, run: Run, section: Section) -> dict[str, Any] | None:
+    """An arrival of this train that reached depot first closes the run just opened: kept
+    without a run, or taken back from the run it closed for want of this departure (which is
+    then in the section again, and takes an arrival of its own train if one came)."""
+    early = occupancy.early_arrival(session, run, before=run.id)
+    if early is not None:
+        return _arrive(session, run, section, early, early.received_at)
+    other = occupancy.mistaken_arrival(session, section, run)
+    if other is None:
+        return None
+    assert other.arrived_at is not None and other.arrival_train is not None
+    arrival = _Arrival(other.arrival_id, other.arrived_at, other.arrival_received_at, run.train)
+    occupancy.reopen(other)
+    session.flush()
+    result = _arrive(session, run, section, arrival, arrival.received_at)
+    own = occupancy.early_arrival(session, other, before=run.id)
+    if own is not None:
+        _arrive(session, other, section, own, own.received_at)
+    return result
 
 
 def _take_evidence(session: Session, run: Run, section: Section, received: datetime | None) -> int:
@@ -317,48 +337,6 @@ def attach(
         reevaluated = evaluate(session, run, section, received=received)
         return {"run": run.id, "side": row.side, "reevaluated": reevaluated}
     return {"run": run.id, "side": row.side}
-
-
-ACTION_WORDS = {"clear": "cleared", "keep_blocked": "kept blocked", "sweep": "sent to a sweep"}
-
-
-def check_action(session: Session, run: Run, section: Section, action: str) -> None:
-    """Refuse (409) an action that cannot apply to the run now, naming why."""
-    if run.status == "conflict":
-        raise Conflict(
-            f"run {run.id} (train {run.train}) departed into section {section.id} before it"
-            f" was cleared and waits behind run {section.current_run_id}: decide run"
-            f" {section.current_run_id} first"
-        )
-    if section.current_run_id != run.id:
-        raise Conflict(f"run {run.id} is not the current run of section {section.id}")
-    if run.arrived_at is None and not occupancy.overtaken(session, run):
-        raise Conflict(
-            f"run {run.id} has not arrived yet; the train is still in section {section.id}"
-        )
-    if section.state == ACTION_STATES[action]:
-        raise Conflict(
-            f"run {run.id} is already {ACTION_WORDS[action]}{_decided_by(session, run, action)}:"
-            f" section {section.id} is {section.state}; nothing was recorded"
-        )
-    if action == "sweep" and section.state not in SWEEP_FROM:
-        raise Conflict(
-            f"section {section.id} is {section.state}: a sweep is asked for a section in alarm,"
-            " review or blocked"
-        )
-
-
-def _decided_by(session: Session, run: Run, action: str) -> str:
-    """ " by olena (dispatcher) at 2026-11-23T10:41:00Z": who took the action, and when."""
-    record = session.scalar(
-        select(AuditRecord)
-        .where(AuditRecord.run_id == run.id, AuditRecord.action == action)
-        .order_by(AuditRecord.id.desc())
-        .limit(1)
-    )
-    if record is None:
-        return ""
-    return f" by {record.actor} ({record.actor_role}) at {format_instant(record.recorded_at)}"
 
 
 def act(
