@@ -45,7 +45,7 @@ def _runs(line: Line) -> dict[str, dict[str, Any]]:
 def _check_and_resolve(line: Line, client: TestClient, session: Session, d: dict[str, str]) -> None:
     runs = _runs(line)
     assert set(runs) == {"2041", "2043"}, runs
-    for train, run in runs.items():
+    for run in runs.values():
         assert run["arrived_at"] is not None, run
         assert run["decision"]["verdict"] == "undetermined", run  # two trains: a person looks
     assert runs["2041"]["arrived_at"] == "2026-11-23T10:20:00Z"
@@ -54,7 +54,7 @@ def _check_and_resolve(line: Line, client: TestClient, session: Session, d: dict
     counts = replay(session)
     session.commit()
     assert counts["failed"] == 0 and snapshot_of_state(client) == before
-    for step in range(2):
+    for _ in range(2):
         section = line.section()
         assert section["state"] != "free", section
         decide(line, d, section["last_run_id"])
