@@ -13,6 +13,7 @@ from sqlalchemy.orm import Session
 from core.models import Section
 from core.timefmt import elapsed
 from ingest import liveness
+from service.clearance import occupancy
 from service.clearance.models import Run
 from service.clearance.rules import SWEEP_FROM
 from service.clearance.service import ACTION_STATES
@@ -90,13 +91,16 @@ def stale_devices(session: Session, now: datetime) -> list[dict[str, Any]]:
     ]
 
 
-def sensible_actions(section: dict[str, Any] | None, run: dict[str, Any] | None) -> list[str]:
+def sensible_actions(
+    section: dict[str, Any] | None, run: dict[str, Any] | None, *, overtaken: bool = False
+) -> list[str]:
     """The actions that would change something, safest first on an alarm.
 
-    Only on the section's current, arrived run; never the action whose state the section is
-    already in; nothing on a free section; a sweep only where nothing proves the section empty.
+    Only on the section's current run, arrived (or ``overtaken``: its arrival never came but
+    the train behind it arrived); never the action whose state the section is already in;
+    nothing on a free section; a sweep only where nothing proves the section empty.
     """
-    if section is None or run is None or run["status"] != "arrived":
+    if section is None or run is None or (run["status"] != "arrived" and not overtaken):
         return []
     if section["last_run_id"] != run["id"] or section["state"] in ("free", "occupied"):
         return []
@@ -192,7 +196,9 @@ def build_screen(
     found = session.get(Run, run_id) if run_id is not None else None
     run = run_out(session, found) if found else None
     held = next((s for s in sections if run and s["id"] == run["section"]), None)
-    actions = sensible_actions(held, run) if role in DECIDERS else []
+    released = found is not None and found.arrived_at is None
+    released = released and found is not None and occupancy.overtaken(session, found)
+    actions = sensible_actions(held, run, overtaken=released) if role in DECIDERS else []
     confirm = {}
     if held and held["state"] in CONFIRM_CLEAR:
         confirm["clear"] = (

@@ -18,6 +18,7 @@ from tests.service.conflictkit import Broker, arrive, decide, depart, resolve_al
 from tests.service.reviewkit import TRANSIT, review_run
 from tests.service.scenario import T0, Line, jpeg
 from tests.service.test_service_replay import snapshot_of_state
+from tests.service.test_service_review_screen import login
 
 ARRIVED = T0 + TRANSIT  # the first train (2041) arrives here in review
 SECOND = ARRIVED + timedelta(minutes=2)  # the second train (2043) departs into it
@@ -87,10 +88,13 @@ def test_arrivals_that_name_no_train_of_the_section_are_an_explicit_doubt(
 
 
 def test_a_run_whose_arrival_never_comes_can_be_resolved_once_the_train_behind_arrived(
-    line: Line, dispatcher: dict[str, str]
+    line: Line, client: TestClient, session: Session, dispatcher: dict[str, str]
 ) -> None:
     r1, r2 = _two_trains(line)
+    decide(line, dispatcher, r1, "keep_blocked", status=409)  # both trains still inside
     assert arrive(line, ARRIVED + timedelta(minutes=3), "2043")["run"] == r2
+    login(client, session, "ivan")
+    assert 'value="keep_blocked"' in client.get(f"/review?run={r1}").text  # offered on screen
     decide(line, dispatcher, r1, "keep_blocked")
     assert line.section()["state"] == "blocked"
     resolve_all(line, dispatcher, [r1, r2])
