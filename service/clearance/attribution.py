@@ -118,9 +118,68 @@ def candidates(session: Session, section: str, start: datetime, end: datetime) -
     )
 
 
+def _eligible(run: Run, at: datetime) -> bool:
+    """The filter of :func:`candidates` for one instant, in Python."""
+    if run.departed_at > at + WINDOWS.before_departure:
+        return False
+    if run.arrived_at is None:
+        return run.status in IN_SECTION
+    return run.arrived_at >= at - WINDOWS.after_arrival
+
+
+# The section's runs read once per transaction (a group commit, a broker batch, replay), kept
+# with the span of evidence times they answer for; valid while the section lock is held (no
+# other writer changes its runs) and until the transaction opens, arrives or releases a run
+# (``forget_runs``); dropped at commit and rollback with the locks.
+LOCKED = "depot_locked_sections"
+SECTION_RUNS = "depot_section_runs"
+# The span of evidence times one read of the section's runs answers for (a group's readings
+# are minutes apart); any span gives exactly the runs the query would, only more or fewer.
+SPAN_READ = timedelta(minutes=30)
+
+
+def forget_runs(session: Session, section: str) -> None:
+    """The section's runs changed (a departure, an arrival, a dispatcher's action)."""
+    session.info.get(SECTION_RUNS, {}).pop(section, None)
+
+
 def run_at(session: Session, section: str, at: datetime, station: str) -> Run | None:
-    """The run holding ``section`` at time ``at``, for evidence from a device at ``station``."""
-    return owner(candidates(session, section, at, at), at, station)
+    """The run holding ``section`` at time ``at``, for evidence from a device at ``station``.
+
+    Under the section's lock the section's runs are read once for a whole group of evidence
+    (exactly the candidates the query would give: same filter, order and limit)."""
+    if section not in session.info.get(LOCKED, ()):
+        return owner(candidates(session, section, at, at), at, station)
+    cache: dict[str, tuple[datetime, datetime, list[Run]]] = session.info.setdefault(
+        SECTION_RUNS, {}
+    )
+    held = cache.get(section)
+    if held is None or not held[0] <= at <= held[1]:
+        start, end = at - SPAN_READ, at + SPAN_READ
+        if held is not None:
+            start, end = min(held[0], start), max(held[1], end)
+        held = (start, end, _spanning(session, section, start, end))
+        cache[section] = held
+    chosen = [r for r in held[2] if _eligible(r, at)][:CANDIDATES]
+    return owner(chosen, at, station)
+
+
+def _spanning(session: Session, section: str, start: datetime, end: datetime) -> list[Run]:
+    """Every run of the section that :func:`candidates` could give for an instant from
+    ``start`` to ``end`` (no limit), latest departure first."""
+    return list(
+        session.scalars(
+            select(Run)
+            .where(Run.section == section, Run.departed_at <= end + WINDOWS.before_departure)
+            .where(
+                or_(
+                    Run.arrived_at >= start - WINDOWS.after_arrival,
+                    and_(Run.arrived_at.is_(None), Run.status.in_(IN_SECTION)),
+                )
+            )
+            .order_by(Run.departed_at.desc(), Run.id.desc())
+        )
+    )
 
 
 def reclaim(session: Session, run: Run) -> tuple[int, set[int]]:

@@ -32,8 +32,7 @@ def evidence_row(model: Callable[..., Row], d: Derivation, **fields: Any) -> Row
 
 
 def attach_evidence(d: Derivation, row: Any) -> dict[str, Any]:
-    """Store the row and attach it to the run holding its section at its device time."""
-    d.session.add(row)
+    """Store the row, attached to the run holding its section at its device time."""
     return service.attach(
         d.session, row, row.section, row.station, row.occurred_at, received=d.raw.received_at
     )

@@ -14,7 +14,7 @@ from core.errors import NotFound
 from core.models import Section
 from core.schemas import format_instant
 from service.clearance import attribution, occupancy
-from service.clearance.attribution import run_at, side_of
+from service.clearance.attribution import LOCKED, SECTION_RUNS, forget_runs, run_at, side_of
 from service.clearance.evidence import gather
 from service.clearance.models import AuditRecord, Run
 from service.clearance.refusals import ACTION_STATES, check_action
@@ -31,9 +31,6 @@ from service.clearance.sweeps import SYSTEM, record_sweep
 
 BUSY_STATES = ("occupied", "awaiting_confirmation", "review", "alarm", "blocked", "awaiting_sweep")
 __all__ = ["ACTION_STATES", "SYSTEM", "act", "attach", "close_run", "evaluate", "open_run"]
-
-
-LOCKED = "depot_locked_sections"
 
 
 def lock_section(session: Session, section_id: str) -> Section:
@@ -59,6 +56,7 @@ def lock_section(session: Session, section_id: str) -> Section:
 def _locks_released(session: Session, *_: object) -> None:
     # A commit ends the transaction; a rollback, even to a savepoint, may release the lock.
     session.info.pop(LOCKED, None)
+    session.info.pop(SECTION_RUNS, None)
 
 
 def _set_state(section: Section, state: str, at: datetime) -> None:
@@ -105,6 +103,7 @@ def open_run(
         departure_received_at=received,
     )
     session.add(run)
+    forget_runs(session, section.id)
     busy = section.state in BUSY_STATES
     if departure_opens_sweep(section.state):
         run.sweep, run.sweep_of = True, section.current_run_id
@@ -141,6 +140,7 @@ def _take_arrival(session: Session, run: Run, section: Section) -> dict[str, Any
     assert other.arrived_at is not None and other.arrival_train is not None
     arrival = _Arrival(other.arrival_id, other.arrived_at, other.arrival_received_at, run.train)
     occupancy.reopen(other)
+    forget_runs(session, section.id)
     session.flush()
     result = _arrive(session, run, section, arrival, arrival.received_at)
     own = occupancy.early_arrival(session, other, before=run.id)
@@ -219,6 +219,7 @@ def _arrive(
 ) -> dict[str, Any]:
     run.arrived_at, run.arrival_received_at = arrival.occurred_at, arrival.received_at
     run.arrival_train, run.arrival_id = arrival.body.get("train"), arrival.id
+    forget_runs(session, section.id)
     if run.status == "running":
         run.status = "arrived"  # a waiting run keeps "conflict" until it is the current run
     return evaluate(session, run, section, received=received)
@@ -326,13 +327,15 @@ def attach(
     """Attach a piece of evidence to the run it belongs to (``attribution``); re-decide the run
     if it has arrived (``received``: when the server got the evidence)."""
     section = lock_section(session, section_id)
-    run = run_at(session, section_id, at, station)
+    # Decided before the row joins the session: no insert and update for one piece (a group of
+    # readings then goes in with one insert, when the session next flushes).
+    with session.no_autoflush:
+        run = run_at(session, section_id, at, station)
+    row.run_id = None if run is None else run.id
+    row.side = None if run is None else side_of(run, station)
+    session.add(row)
     if run is None:
-        row.run_id, row.side = None, None
-        session.flush()
         return {"run": None, "note": f"no run in section {section_id} at that time; evidence kept"}
-    row.run_id, row.side = run.id, side_of(run, station)
-    session.flush()
     if run.arrived_at is not None:
         reevaluated = evaluate(session, run, section, received=received)
         return {"run": run.id, "side": row.side, "reevaluated": reevaluated}
@@ -368,6 +371,7 @@ def act(
     run.auto = False
     if run.arrived_at is None:
         run.status = "overtaken"  # released without an arrival: it holds the section no more
+        forget_runs(session, section.id)
     if action == "clear":
         promote_conflict(session, section, at)
     record = None
