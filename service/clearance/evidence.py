@@ -26,51 +26,11 @@ from service.clearance.rules import (
 from service.setup.service import section_devices
 from tail_check.profile import CameraProfile
 
-# Readers and cameras sense the train around the interlocking's departure/arrival report, not at
-# the same instant: evidence within this window of a run still belongs to it.
-EVIDENCE_WINDOW = timedelta(minutes=10)
 EVIDENCE_DEVICE_KINDS = ("camera", "wheel_mark_reader", "ir_reader", "axle_counter")
 EOT_KINDS = ("eot_receiver",)
 DEFAULT_ABSENT_CONFIDENCE = CameraProfile().absent_confidence
 # An EOT report counts for the run between departure and this long after arrival (clearance.md).
 EOT_AFTER_ARRIVAL = timedelta(seconds=60)
-
-
-def run_at(session: Session, section: str, at: datetime, station: str) -> Run | None:
-    """The run holding ``section`` at time ``at``, for evidence from a device at ``station``
-    (one train per section: the block's guarantee).
-
-    A run that holds the section at ``at`` (departed, not yet arrived) owns the evidence. Only
-    the departure station's devices see a train before its departure is reported, so only their
-    evidence may come up to :data:`EVIDENCE_WINDOW` before it; evidence dated before a run's
-    departure from anywhere else belongs to the earlier run whose window contains it, or to none.
-    """
-    candidates = session.scalars(
-        select(Run)
-        .where(Run.section == section, Run.status != "conflict")
-        .where(Run.departed_at <= at + EVIDENCE_WINDOW)
-        .order_by(Run.departed_at.desc())
-        .limit(3)
-    ).all()
-    for run in candidates:
-        if at < run.departed_at:
-            earlier_holds = any(
-                c.departed_at <= at and (c.arrived_at is None or at <= c.arrived_at)
-                for c in candidates
-            )
-            if station != run.from_station or earlier_holds:
-                continue
-        if run.arrived_at is None or at <= run.arrived_at + EVIDENCE_WINDOW:
-            return run
-    return None
-
-
-def side_of(run: Run, station: str) -> str | None:
-    if station == run.from_station:
-        return "departure"
-    if station == run.to_station:
-        return "arrival"
-    return None
 
 
 def moment(run: Run, side: str) -> datetime:

@@ -32,9 +32,10 @@ def evidence_row(model: Callable[..., Row], d: Derivation, **fields: Any) -> Row
 
 
 def attach_evidence(d: Derivation, row: Any) -> dict[str, Any]:
-    """Store the row and attach it to the run holding its section at its device time."""
-    d.session.add(row)
-    return service.attach(d.session, row, row.section, row.station, row.occurred_at)
+    """Store the row, attached to the run holding its section at its device time."""
+    return service.attach(
+        d.session, row, row.section, row.station, row.occurred_at, received=d.raw.received_at
+    )
 
 
 def train_departed(d: Derivation) -> dict[str, Any]:
@@ -58,6 +59,7 @@ def train_arrived(d: Derivation) -> dict[str, Any]:
         d.event.train,
         d.event.occurred_at,
         received=d.raw.received_at,
+        arrival_id=d.raw.id,
     )
 
 

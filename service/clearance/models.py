@@ -24,7 +24,8 @@ class Run(Base):
     to_station: Mapped[str] = mapped_column(String(32))
     departed_at: Mapped[datetime] = mapped_column(UTCDateTime())
     arrived_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
-    # "running" (in the section), "arrived", or "conflict" (departed into an occupied section).
+    # "running" (in the section), "arrived", or "conflict" (departed into a section that was not
+    # cleared, and waiting behind its current run; ``arrived_at`` says whether it arrived).
     status: Mapped[str] = mapped_column(String(16), default="running")
     verdict: Mapped[str | None] = mapped_column(String(16), nullable=True)
     reasons: Mapped[list[str]] = mapped_column(JSON, default=list)
@@ -45,6 +46,13 @@ class Run(Base):
     # The train number the arrival reported (``train_arrived.train``): another number than
     # the departure's is evidence every re-decision keeps (service.train_contradictions).
     arrival_train: Mapped[str | None] = mapped_column(String(32), nullable=True)
+    # Departed into a section that was not cleared: why, in words (kept for every re-decision,
+    # which must ask a person). ``status`` is "conflict" while the run waits behind the
+    # section's current run, arrived or not.
+    conflict: Mapped[str | None] = mapped_column(Text, nullable=True)
+    # The raw id of the ``train_arrived`` that closed the run (an arrival that reached depot
+    # before its departure is found by that departure: service.arrivals).
+    arrival_id: Mapped[int | None] = mapped_column(BigId, nullable=True)
 
 
 class EvidenceColumns:

@@ -49,7 +49,16 @@ class RunOut(Answer):
     id: int
     section: str
     train: str
-    status: str = Field(description="running, arrived or conflict")
+    status: str = Field(
+        description="running, arrived, conflict (departed into a section that was not cleared"
+        " and waits behind its current run, arrived or not: see arrived_at), or overtaken"
+        " (its arrival never came, a train behind it arrived, and a dispatcher acted on it)"
+    )
+    conflict: str | None = Field(
+        default=None,
+        description="why the run departed into a section that was not cleared (a person must"
+        " look at such a run; it is never decided complete by itself)",
+    )
     from_station: str
     to_station: str
     departed_at: Instant | None = Field(description="the interlocking's (device) time")

@@ -262,6 +262,26 @@ def next_state(current: str, verdict: Verdict, mode: str) -> str:
     return current
 
 
+def redecided_state(current: str, verdict: Verdict, mode: str, new_concern: bool) -> str:
+    """Where the section goes when late evidence decides its current run again, after a
+    decision was shown (by the rules or by a dispatcher).
+
+    While the section still waits for evidence (``occupied``, ``review``,
+    ``awaiting_confirmation``) it follows the verdict (:func:`next_state`). A settled state —
+    freed, cleared, kept blocked, in alarm, awaiting a sweep — changes only for a
+    ``new_concern``, a reason the decision shown did not have: a new proof of loss raises the
+    alarm, a new doubt on a free section asks for review. Late evidence that agrees with what
+    was shown changes nothing: it never re-raises an alarm a dispatcher has cleared.
+    """
+    if current in ("occupied", "review", "awaiting_confirmation"):
+        return next_state(current, verdict, mode)
+    if not new_concern:
+        return current
+    if verdict == "incomplete":
+        return next_state(current, verdict, mode)
+    return "review" if verdict == "undetermined" and current == "free" else current
+
+
 def departure_opens_sweep(state: str) -> bool:
     """A train departing into a section awaiting a sweep is the sweep run, not a conflict."""
     return state == "awaiting_sweep"

@@ -5,32 +5,32 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import event, select, update
+from sqlalchemy import event, select
 from sqlalchemy.orm import Session
 
 from core.auth import Principal
 from core.database import utcnow
-from core.errors import Conflict, NotFound
+from core.errors import NotFound
 from core.models import Section
 from core.schemas import format_instant
-from ingest.models import Snapshot
-from service.clearance.evidence import EVIDENCE_WINDOW, gather, run_at, side_of
-from service.clearance.models import AuditRecord, AxleReading, CarPassage, Run
+from service.clearance import attribution, occupancy
+from service.clearance.attribution import LOCKED, SECTION_RUNS, forget_runs, run_at, side_of
+from service.clearance.evidence import gather
+from service.clearance.models import AuditRecord, Run
+from service.clearance.refusals import ACTION_STATES, check_action
 from service.clearance.rules import (
-    SWEEP_FROM,
+    Decision,
+    Verdict,
     decide,
     departure_opens_sweep,
     describe_sweep,
     next_state,
-    sweep_clears_original,
+    redecided_state,
 )
+from service.clearance.sweeps import SYSTEM, record_sweep
 
 BUSY_STATES = ("occupied", "awaiting_confirmation", "review", "alarm", "blocked", "awaiting_sweep")
-ACTION_STATES = {"clear": "free", "keep_blocked": "blocked", "sweep": "awaiting_sweep"}
-SYSTEM = Principal(role="system", name="depot")  # author of the audit records it writes itself
-
-
-LOCKED = "depot_locked_sections"
+__all__ = ["ACTION_STATES", "SYSTEM", "act", "attach", "close_run", "evaluate", "open_run"]
 
 
 def lock_section(session: Session, section_id: str) -> Section:
@@ -56,12 +56,15 @@ def lock_section(session: Session, section_id: str) -> Section:
 def _locks_released(session: Session, *_: object) -> None:
     # A commit ends the transaction; a rollback, even to a savepoint, may release the lock.
     session.info.pop(LOCKED, None)
+    session.info.pop(SECTION_RUNS, None)
 
 
 def _set_state(section: Section, state: str, at: datetime) -> None:
+    # A state's time never goes back before one already shown (a late departure, a device
+    # clock behind, late evidence after a dispatcher's decision).
     if section.state != state:
         section.state = state
-        section.state_since = at
+        section.state_since = occupancy.later(section.state_since, at)
 
 
 def open_run(
@@ -75,11 +78,13 @@ def open_run(
     eot_unit: int | None = None,
     received: datetime | None = None,
 ) -> dict[str, Any]:
-    """``train_departed``: the train takes the block, or a conflict is recorded and raised.
+    """``train_departed``: the train takes the block, or it is a conflict (it departed into a
+    section not cleared) and waits behind the section's current run (``occupancy``).
 
     Into a section awaiting a sweep the train is the sweep run: no conflict, it holds the
     section and remembers the run it sweeps. ``received`` is when the server received the
-    departure: the departure-side devices' liveness is judged then.
+    departure: the departure-side devices' liveness is judged then. The evidence that belongs
+    to the new run joins it, and an arrival of this train that came first closes it.
     """
     section = lock_section(session, section_id)
     run = Run(
@@ -97,54 +102,65 @@ def open_run(
         sweep=False,
         departure_received_at=received,
     )
+    session.add(run)
+    forget_runs(session, section.id)
+    busy = section.state in BUSY_STATES
     if departure_opens_sweep(section.state):
         run.sweep, run.sweep_of = True, section.current_run_id
-    elif section.state in BUSY_STATES:
-        holder = session.get(Run, section.current_run_id) if section.current_run_id else None
-        run.status = "conflict"
-        run.verdict = None
-        detail = f"train {train} departed into section {section.id}, which is {section.state}" + (
-            f" (run {holder.id}, train {holder.train})" if holder else ""
-        )
-        run.reasons = [detail]
-        session.add(run)
-        _set_state(section, "alarm", at)
-        session.flush()
-        return {"run": run_id, "conflict": True, "detail": detail, "section_state": section.state}
-    session.add(run)
-    section.current_run_id = run_id
-    _set_state(section, "occupied", at)
-    adopted = adopt_departure_evidence(session, run)
+    else:
+        run.conflict = occupancy.conflict_words(session, section, run, busy)
+    if run.conflict and busy:
+        run.status = "conflict"  # waits behind the current run
+    else:
+        section.current_run_id = run_id
+    _set_state(section, "alarm" if run.conflict else "occupied", at)
     session.flush()
-    out: dict[str, Any] = {"run": run_id, "section_state": section.state}
+    out: dict[str, Any] = {"run": run_id}
+    if run.conflict:
+        out.update(conflict=True, detail=run.conflict)
     if run.sweep:
         out.update(sweep=True, sweep_of=run.sweep_of)
-    return {**out, "adopted_evidence": adopted}
+    out["adopted_evidence"] = _take_evidence(session, run, section, received)
+    arrival = _take_arrival(session, run, section)
+    if arrival is not None:
+        out["arrival"] = arrival
+    return {**out, "section_state": section.state}
 
 
-def adopt_departure_evidence(session: Session, run: Run) -> int:
-    """Departure-side readers and cameras see the train just before the interlocking reports
-    the departure: their evidence, stored without a run, now joins this run."""
-    adopted = 0
-    models: tuple[type[Snapshot] | type[CarPassage] | type[AxleReading], ...] = (
-        Snapshot,
-        CarPassage,
-        AxleReading,
-    )
-    for model in models:
-        result = session.execute(
-            update(model)
-            .where(
-                model.run_id.is_(None),
-                model.section == run.section,
-                model.station == run.from_station,
-                model.occurred_at >= run.departed_at - EVIDENCE_WINDOW,
-                model.occurred_at <= run.departed_at,
-            )
-            .values(run_id=run.id, side="departure")
-        )
-        adopted += result.rowcount  # type: ignore[attr-defined]
-    return adopted
+def _take_arrival(session: Session, run: Run, section: Section) -> dict[str, Any] | None:
+    """An arrival of this train that reached depot first closes the run just opened: kept
+    without a run, or taken back from the run it closed for want of this departure (which is
+    then in the section again, and takes an arrival of its own train if one came)."""
+    early = occupancy.early_arrival(session, run, before=run.id)
+    if early is not None:
+        return _arrive(session, run, section, early, early.received_at)
+    other = occupancy.mistaken_arrival(session, section, run)
+    if other is None:
+        return None
+    assert other.arrived_at is not None and other.arrival_train is not None
+    arrival = _Arrival(other.arrival_id, other.arrived_at, other.arrival_received_at, run.train)
+    occupancy.reopen(other)
+    forget_runs(session, section.id)
+    session.flush()
+    result = _arrive(session, run, section, arrival, arrival.received_at)
+    own = occupancy.early_arrival(session, other, before=run.id)
+    if own is not None:
+        _arrive(session, other, section, own, own.received_at)
+    return result
+
+
+def _take_evidence(session: Session, run: Run, section: Section, received: datetime | None) -> int:
+    """The evidence that belongs to a run just opened joins it; the earlier runs it came from,
+    and those that shared the section with it, are decided again (they may owe a person a
+    look now)."""
+    taken, again = attribution.reclaim(session, run)
+    session.flush()
+    again |= {o.id for o in occupancy.overlapping(session, run)}
+    for other_id in sorted(again):
+        other = session.get(Run, other_id)
+        if other is not None and other.arrived_at is not None:
+            evaluate(session, other, section, received=received)
+    return taken
 
 
 def close_run(
@@ -155,21 +171,58 @@ def close_run(
     at: datetime,
     *,
     received: datetime | None = None,
+    arrival_id: int | None = None,
 ) -> dict[str, Any]:
-    """``train_arrived``: the current run arrives at the far station and is decided; the
-    arrival-side devices' liveness is judged at ``received``, when the server got the arrival."""
+    """``train_arrived``: the open run with this train number (else the first that departed)
+    arrives at the far station and is decided; the arrival-side devices' liveness is judged
+    at ``received``, when the server got the arrival. An arrival that finds no run is kept:
+    a departure reported late takes it."""
     section = lock_section(session, section_id)
-    run = session.get(Run, section.current_run_id) if section.current_run_id else None
-    if run is None or run.status != "running":
-        return {"run": None, "warning": f"no train was running in section {section.id}"}
-    if station != run.to_station:
+    run = occupancy.arriving_run(session, section, station, train)
+    if run is None:
+        other = occupancy.arriving_run(session, section, _other_end(section, station), train)
+        if other is not None:
+            return {
+                "run": other.id,
+                "warning": f"arrival reported at {station}, but run {other.id} goes to"
+                f" {other.to_station}",
+            }
         return {
-            "run": run.id,
-            "warning": f"arrival reported at {station}, but run {run.id} goes to {run.to_station}",
+            "run": None,
+            "warning": f"no train was running in section {section.id}; the arrival is kept"
+            " for a departure that reaches depot later",
         }
-    run.arrived_at, run.arrival_received_at, run.arrival_train = at, received, train
-    run.status = "arrived"
-    return evaluate(session, run, section)
+    arrival = _Arrival(arrival_id, at, received, train)
+    return _arrive(session, run, section, arrival, received)
+
+
+class _Arrival:
+    """What a run keeps of its ``train_arrived`` (a raw event stored earlier has the same)."""
+
+    def __init__(
+        self, ident: int | None, at: datetime, received: datetime | None, train: str
+    ) -> None:
+        self.id, self.occurred_at, self.received_at, self.body = (
+            ident,
+            at,
+            received,
+            {"train": train},
+        )
+
+
+def _other_end(section: Section, station: str) -> str:
+    return section.from_station if station == section.to_station else section.to_station
+
+
+def _arrive(
+    session: Session, run: Run, section: Section, arrival: Any, received: datetime | None
+) -> dict[str, Any]:
+    run.arrived_at, run.arrival_received_at = arrival.occurred_at, arrival.received_at
+    run.arrival_train, run.arrival_id = arrival.body.get("train"), arrival.id
+    forget_runs(session, section.id)
+    if run.status == "running":
+        run.status = "arrived"  # a waiting run keeps "conflict" until it is the current run
+    return evaluate(session, run, section, received=received)
 
 
 def train_contradictions(run: Run) -> list[str]:
@@ -195,134 +248,98 @@ def time_contradictions(run: Run) -> list[str]:
 
 
 def evaluate(
-    session: Session, run: Run, section: Section, *, notes: list[str] | None = None
+    session: Session, run: Run, section: Section, *, received: datetime | None = None
 ) -> dict[str, Any]:
-    """Decide an arrived run from its evidence; the section follows when the run holds it."""
+    """Decide an arrived run from its evidence; the section follows when the run holds it.
+
+    The first decision dates the section's state at the arrival; a re-decision (late
+    evidence, ``received`` by the server then) after a decision was shown changes the section
+    only for something new that a person must see (``rules.redecided_state``), dated when it
+    came — never before the decision already shown.
+    """
+    first, before = run.decided_at is None, list(run.reasons or [])
     previous = run.verdict
-    notes = [*time_contradictions(run), *train_contradictions(run), *(notes or [])]
+    notes = [*time_contradictions(run), *train_contradictions(run), *occupancy.notes(session, run)]
     gathered = gather(session, run, section)
     decision = decide(gathered.evidence)
-    verdict, reasons = decision.verdict, [*decision.reasons, *(notes or [])]
-    if notes and verdict == "complete":
-        verdict = "undetermined"  # a mismatched train number or clock needs a person's eyes
+    verdict, reasons = blocking_first(decision, notes)
     if run.sweep and run.sweep_of is not None:
         reasons.append(describe_sweep(run.id, run.sweep_of, verdict))
     run.verdict, run.reasons, run.evidence = verdict, reasons, gathered.summary
-    if run.decided_at is None:
+    if first:
         run.decided_at = run.arrived_at
-    at = run.arrived_at or run.departed_at
+    at = (run.arrived_at or run.departed_at) if first else (received or utcnow())
     if run.sweep and run.sweep_of is not None:
-        _record_sweep(session, run, section)
-    if section.current_run_id == run.id:
-        _set_state(section, next_state(section.state, verdict, section.mode), at)
+        record_sweep(session, run, section)
+    if section.current_run_id == run.id and run.status != "conflict":
+        if first:
+            state = next_state(section.state, verdict, section.mode)
+        else:
+            new = verdict != "complete" and bool(set(reasons) - set(before))
+            state = redecided_state(section.state, verdict, section.mode, new)
+        _set_state(section, state, at)
         if section.state == "free":
             promote_conflict(session, section, at)
     elif verdict == "incomplete" and previous != "incomplete":
         # Late proof that an earlier train lost cars: they may still stand in the section the
         # next train now holds (clearance.md: late evidence of incompleteness raises the alarm).
-        _set_state(section, next_state(section.state, verdict, section.mode), utcnow())
+        _set_state(section, next_state(section.state, verdict, section.mode), at)
     session.flush()
     return {"run": run.id, "verdict": verdict, "reasons": reasons, "section_state": section.state}
 
 
-def _record_sweep(session: Session, sweep: Run, section: Section) -> None:
-    """Link the swept run to its sweep run while (and only while) the sweep is complete.
-
-    The audit gets one record per sweep that cleared a run, with both runs and the sweep's
-    evidence; it is written once (a re-decision or a replay finds it and adds none).
-    """
-    original = session.get(Run, sweep.sweep_of) if sweep.sweep_of is not None else None
-    if original is None:
-        return
-    if not sweep_clears_original(sweep.verdict):  # type: ignore[arg-type]
-        if original.cleared_by == sweep.id:
-            original.cleared_by = None  # late evidence took the proof away
-        return
-    original.cleared_by = sweep.id
-    written = session.scalar(
-        select(AuditRecord.id).where(
-            AuditRecord.run_id == original.id, AuditRecord.action == "cleared_by_sweep"
-        )
-    )
-    if written is None:
-        session.add(
-            AuditRecord(
-                run_id=original.id,
-                section=section.id,
-                action="cleared_by_sweep",
-                reason=describe_sweep(sweep.id, original.id, "complete"),
-                actor=SYSTEM.name,
-                actor_role=SYSTEM.role,
-                recorded_at=utcnow(),  # when written, like every audit record
-                state_before="awaiting_sweep",
-                state_after=next_state("occupied", "complete", section.mode),
-                evidence={
-                    "swept_run_id": original.id,
-                    "sweep_run_id": sweep.id,
-                    "sweep_train": sweep.train,
-                    "sweep_verdict": sweep.verdict,
-                    "sweep_reasons": sweep.reasons,
-                    "sweep_evidence": sweep.evidence,
-                },
-            )
-        )
+def blocking_first(decision: Decision, notes: list[str]) -> tuple[Verdict, list[str]]:
+    """The verdict with the run's own doubts (``notes``), and the reasons ordered so that the
+    first one — the queue's headline — is what blocks: a loss, then a doubt, and what agrees
+    last (a train-number mismatch is never shown behind "axle counts agree")."""
+    if decision.verdict == "complete" and notes:
+        # a mismatched train number or clock, a conflict: a person's eyes are needed
+        return "undetermined", [*notes, *decision.reasons]
+    return decision.verdict, [*decision.reasons, *notes]
 
 
 def promote_conflict(session: Session, section: Section, at: datetime) -> None:
-    """When a section frees, a train recorded as a conflict (still in it) now holds it."""
-    waiting = session.scalar(
-        select(Run)
-        .where(Run.section == section.id, Run.status == "conflict")
-        .order_by(Run.departed_at)
-    )
-    if waiting is not None:
+    """When the current run is resolved, the first train waiting behind it (a conflict) holds
+    the section: still running (``occupied``), or arrived and decided — then the section
+    follows that decision, which is never ``complete`` for a conflict (a person must look)."""
+    waiting = occupancy.next_waiting(session, section)
+    if waiting is None:
+        return
+    section.current_run_id = waiting.id
+    if waiting.arrived_at is None:
         waiting.status = "running"
-        section.current_run_id = waiting.id
         _set_state(section, "occupied", at)
+        return
+    waiting.status = "arrived"
+    verdict: Verdict = waiting.verdict or "undetermined"  # type: ignore[assignment]
+    _set_state(section, next_state("occupied", verdict, section.mode), at)
 
 
 def attach(
-    session: Session, row: Any, section_id: str, station: str, at: datetime
+    session: Session,
+    row: Any,
+    section_id: str,
+    station: str,
+    at: datetime,
+    *,
+    received: datetime | None = None,
 ) -> dict[str, Any]:
-    """Attach a piece of evidence to the run holding the section then; re-decide if arrived."""
+    """Attach a piece of evidence to the run it belongs to (``attribution``); re-decide the run
+    if it has arrived (``received``: when the server got the evidence)."""
     section = lock_section(session, section_id)
-    run = run_at(session, section_id, at, station)
-    # Departure-side devices see a train before it leaves; after the run has arrived they
-    # are seeing the next train (a sweep train, say), which adopts their evidence on departure.
-    if run is not None and run.arrived_at is not None and at > run.arrived_at:
-        run = None if station == run.from_station else run
+    # Decided before the row joins the session: no insert and update for one piece (a group of
+    # readings then goes in with one insert, when the session next flushes).
+    with session.no_autoflush:
+        run = run_at(session, section_id, at, station)
+    row.run_id = None if run is None else run.id
+    row.side = None if run is None else side_of(run, station)
+    session.add(row)
     if run is None:
-        row.run_id, row.side = None, None
-        session.flush()
         return {"run": None, "note": f"no run in section {section_id} at that time; evidence kept"}
-    row.run_id, row.side = run.id, side_of(run, station)
-    session.flush()
-    if run.status == "arrived":
-        return {"run": run.id, "side": row.side, "reevaluated": evaluate(session, run, section)}
+    if run.arrived_at is not None:
+        reevaluated = evaluate(session, run, section, received=received)
+        return {"run": run.id, "side": row.side, "reevaluated": reevaluated}
     return {"run": run.id, "side": row.side}
-
-
-ACTION_WORDS = {"clear": "cleared", "keep_blocked": "kept blocked", "sweep": "sent to a sweep"}
-
-
-def check_action(run: Run, section: Section, action: str) -> None:
-    """Refuse (409) an action that cannot apply to the run now, naming why."""
-    if section.current_run_id != run.id:
-        raise Conflict(f"run {run.id} is not the current run of section {section.id}")
-    if run.status != "arrived":
-        raise Conflict(
-            f"run {run.id} has not arrived yet; the train is still in section {section.id}"
-        )
-    if section.state == ACTION_STATES[action]:
-        raise Conflict(
-            f"run {run.id} is already {ACTION_WORDS[action]}: section {section.id} is"
-            f" {section.state}; nothing was recorded"
-        )
-    if action == "sweep" and section.state not in SWEEP_FROM:
-        raise Conflict(
-            f"section {section.id} is {section.state}: a sweep is asked for a section in alarm,"
-            " review or blocked"
-        )
 
 
 def act(
@@ -347,11 +364,14 @@ def act(
     if run is None:
         raise NotFound(f"run {run_id} does not exist")
     section = lock_section(session, run.section)
-    check_action(run, section, action)
+    check_action(session, run, section, action)
     before = section.state
     gathered = gather(session, run, section)
     _set_state(section, ACTION_STATES[action], at)
     run.auto = False
+    if run.arrived_at is None:
+        run.status = "overtaken"  # released without an arrival: it holds the section no more
+        forget_runs(session, section.id)
     if action == "clear":
         promote_conflict(session, section, at)
     record = None

@@ -14,7 +14,7 @@ from core.settings import get_settings
 from ingest.handlers import Derivation, install_preparer
 from ingest.models import Snapshot
 from ingest.snapshots import load_bgr, stored_image
-from service.clearance.evidence import run_at, side_of
+from service.clearance.attribution import run_at, side_of
 from service.clearance.handlers import attach_evidence, evidence_row
 from tail_check.profile import CameraProfile
 

@@ -45,6 +45,7 @@ def run_out(session: Session, run: Run) -> dict[str, Any]:
         "section": run.section,
         "train": run.train,
         "status": run.status,
+        "conflict": run.conflict,
         "from_station": run.from_station,
         "to_station": run.to_station,
         "departed_at": _iso(run.departed_at),

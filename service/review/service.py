@@ -13,6 +13,7 @@ from sqlalchemy.orm import Session
 from core.models import Section
 from core.timefmt import elapsed
 from ingest import liveness
+from service.clearance import occupancy
 from service.clearance.models import Run
 from service.clearance.rules import SWEEP_FROM
 from service.clearance.service import ACTION_STATES
@@ -90,13 +91,16 @@ def stale_devices(session: Session, now: datetime) -> list[dict[str, Any]]:
     ]
 
 
-def sensible_actions(section: dict[str, Any] | None, run: dict[str, Any] | None) -> list[str]:
+def sensible_actions(
+    section: dict[str, Any] | None, run: dict[str, Any] | None, *, overtaken: bool = False
+) -> list[str]:
     """The actions that would change something, safest first on an alarm.
 
-    Only on the section's current, arrived run; never the action whose state the section is
-    already in; nothing on a free section; a sweep only where nothing proves the section empty.
+    Only on the section's current run, arrived (or ``overtaken``: its arrival never came but
+    the train behind it arrived); never the action whose state the section is already in;
+    nothing on a free section; a sweep only where nothing proves the section empty.
     """
-    if section is None or run is None or run["status"] != "arrived":
+    if section is None or run is None or (run["status"] != "arrived" and not overtaken):
         return []
     if section["last_run_id"] != run["id"] or section["state"] in ("free", "occupied"):
         return []
@@ -131,6 +135,41 @@ def queue_order(queue: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return sorted(queue, key=lambda s: (rank.get(s["state"], len(rank)), s["state_since"] or ""))
 
 
+SETTLED_WORDS = {"blocked": "kept blocked by a dispatcher", "alarm": "in alarm"}
+
+
+def headline(session: Session, section: dict[str, Any]) -> str:
+    """The one line a dispatcher reads first for a queued section: why it needs a person.
+
+    The current run's first reason when its verdict is not ``complete`` (reasons are ordered
+    blocking first). A complete run in a section that is not free is not the reason: the
+    section is held by something else — a train waiting behind it, an earlier run's late proof
+    of loss, a dispatcher's block — and that is named instead of "tail disc present".
+    """
+    run = section["run"]
+    decision = run["decision"] if run else None
+    reasons = decision["reasons"] if decision else []
+    if decision and decision["verdict"] != "complete" and reasons:
+        return str(reasons[0])
+    if section["conflict_runs"]:
+        return (
+            f"run {section['conflict_runs'][0]} departed into section {section['id']} before it"
+            " was cleared"
+        )
+    if section["state"] == "alarm":
+        earlier = session.scalars(
+            select(Run)
+            .where(Run.section == section["id"], Run.id != run["id"], Run.verdict == "incomplete")
+            .order_by(Run.id.desc())
+            .limit(1)
+        ).first()
+        if earlier is not None and earlier.reasons:
+            return f"run {earlier.id} (train {earlier.train}): {earlier.reasons[0]}"
+    if section["state"] in SETTLED_WORDS and decision and decision["verdict"] == "complete":
+        return f"section {SETTLED_WORDS[section['state']]}; this run arrived complete"
+    return str(reasons[0]) if reasons else ""
+
+
 def _title(queue: list[dict[str, Any]]) -> str:
     alarms = [s["id"] for s in queue if s["state"] == "alarm"]
     if alarms:
@@ -149,6 +188,7 @@ def build_screen(
     )
     for s in queue:
         s["since_words"] = _since(s, now)
+        s["headline"] = headline(session, s)
     recent_runs = session.scalars(select(Run).order_by(Run.id.desc()).limit(15)).all()
     recent = [run_out(session, r) for r in recent_runs]
     if run_id is None and queue:
@@ -156,7 +196,9 @@ def build_screen(
     found = session.get(Run, run_id) if run_id is not None else None
     run = run_out(session, found) if found else None
     held = next((s for s in sections if run and s["id"] == run["section"]), None)
-    actions = sensible_actions(held, run) if role in DECIDERS else []
+    released = found is not None and found.arrived_at is None
+    released = released and found is not None and occupancy.overtaken(session, found)
+    actions = sensible_actions(held, run, overtaken=released) if role in DECIDERS else []
     confirm = {}
     if held and held["state"] in CONFIRM_CLEAR:
         confirm["clear"] = (

@@ -174,7 +174,8 @@ def test_eot_report_arriving_after_the_decision_re_decides(line: Line) -> None:
         "B-eot", "eot_status", ARRIVE + timedelta(seconds=90), section="AB",
         unit_address=39572, pressure_psig=0,
     )  # fmt: skip
-    assert too_late["reevaluated"]["verdict"] == "complete"  # outside arrival + 60 s
+    # outside arrival + 60 s: it belongs to no run (attribution.AttachmentWindows.after_arrival)
+    assert too_late["run"] is None and line.section()["state"] == "free", too_late
 
 
 def _eot_event(line: Line, **fields: Any) -> Any:
