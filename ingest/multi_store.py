@@ -86,20 +86,23 @@ def _row(batch: DeviceBatch, index: int, event: Any, body: Result, transport: st
 
 
 def accept_batches(
-    session: Session, batches: Sequence[DeviceBatch], *, transport: str
+    session: Session, batches: Sequence[DeviceBatch], *, transport: str, optimistic: bool = False
 ) -> list[list[Result]]:
     """The ``results`` list of ``accept_batch`` for each batch, all in ``session`` (the caller
     commits). Derivations run in the order of ``batches`` (give them in the order the section
     locks are taken, as the group commit does); each device's items in their own order. As in
     the HTTP group commit, loaded rows are kept for the whole call and the devices' liveness
     rows are written at its end in device order, so that a broker batch and an HTTP group never
-    lock section and device rows in a cycle."""
+    lock section and device rows in a cycle. ``optimistic``: derive without a savepoint per
+    event, for a caller that rolls back and handles every message by itself should anything
+    but a refusal fail (``transports.envelope.handle_batch``); the raw event of a failing
+    derivation is then kept by that second pass."""
     with holding(session), touched_at_end(session):
-        return _accept_batches(session, batches, transport=transport)
+        return _accept_batches(session, batches, transport=transport, optimistic=optimistic)
 
 
 def _accept_batches(
-    session: Session, batches: Sequence[DeviceBatch], *, transport: str
+    session: Session, batches: Sequence[DeviceBatch], *, transport: str, optimistic: bool
 ) -> list[list[Result]]:
     results: list[list[Result | None]] = [[None] * len(b.items) for b in batches]
     first: dict[tuple[str, str], _Entry] = {}
@@ -128,7 +131,7 @@ def _accept_batches(
             derive(Derivation(session, as_raw(raw_id, values), event, device))
             result = values["result"]
         else:
-            row = derive_new(session, device, event, raw_id, values)
+            row = derive_new(session, device, event, raw_id, values, savepoint=not optimistic)
             answers.append(row)
             result = row["result"]
         results[b][index] = {"event_id": event.event_id, "status": "created", "result": result}

@@ -64,11 +64,26 @@ def answer_stored(
 
 
 def derive_new(
-    session: Session, device: Device, event: Any, raw_id: int, values: dict[str, Any]
+    session: Session,
+    device: Device,
+    event: Any,
+    raw_id: int,
+    values: dict[str, Any],
+    *,
+    savepoint: bool = True,
 ) -> dict[str, Any]:
-    """Derive a new event; returns its pending answer row (id, result, derive_error)."""
+    """Derive a new event; returns its pending answer row (id, result, derive_error).
+
+    ``savepoint=False`` is for a caller that redoes its whole transaction item by item should
+    anything fail (the broker batch, like the group commit): the derivation runs without a
+    savepoint of its own and any error propagates.
+    """
     raw = as_raw(raw_id, values)
-    derived = run_derivation(session, raw, event, device)
+    derived = (
+        run_derivation(session, raw, event, device)
+        if savepoint
+        else derive(Derivation(session, raw, event, device))
+    )
     result = {"event_id": event.event_id, "status": "created", **derived}
     return {"id": raw_id, "result": result, "derive_error": raw.derive_error}
 

@@ -269,7 +269,9 @@ def _grouped(
         )
         for device, parts in by_device
     ]
-    stored = accept_batches(session, batches, transport=transport)
+    # Optimistic: should a derivation fail, handle_batch rolls back and redoes each message
+    # in its own savepoint, where the failing event's raw row is kept with its derive_error.
+    stored = accept_batches(session, batches, transport=transport, optimistic=True)
     for (device, parts), results in zip(by_device, stored, strict=True):
         at = 0
         for part in parts:

@@ -149,14 +149,15 @@ def reopen(run: Run) -> None:
 
 
 def overtaken(session: Session, run: Run) -> bool:
-    """Another train arrived out of the section after this one departed: on single track it
+    """A train that departed after this one has arrived out of the section: on single track it
     cannot have passed it, so this run's missing arrival is for a person to judge (and a
-    dispatcher may act on the run although its arrival never came)."""
+    dispatcher may act on the run although its arrival never came). The arrival of a train
+    *ahead* of it proves nothing of the kind: this train may well still be in the section."""
     return (
         session.scalar(
             select(Run.id)
             .where(Run.section == run.section, Run.id != run.id)
-            .where(Run.arrived_at > run.departed_at)
+            .where(Run.departed_at > run.departed_at, Run.arrived_at > run.departed_at)
             .limit(1)
         )
         is not None

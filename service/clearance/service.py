@@ -6,7 +6,7 @@ from datetime import datetime
 from typing import Any
 
 from sqlalchemy import event, select
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session, SessionTransaction
 
 from core.auth import Principal
 from core.database import utcnow
@@ -52,11 +52,20 @@ def lock_section(session: Session, section_id: str) -> Section:
 
 
 @event.listens_for(Session, "after_soft_rollback")
-@event.listens_for(Session, "after_commit")
 def _locks_released(session: Session, *_: object) -> None:
-    # A commit ends the transaction; a rollback, even to a savepoint, may release the lock.
+    # A rollback, even to a savepoint, may release the lock (and undo what was read under it).
     session.info.pop(LOCKED, None)
     session.info.pop(SECTION_RUNS, None)
+
+
+@event.listens_for(Session, "after_transaction_end")
+def _transaction_ended(session: Session, transaction: SessionTransaction) -> None:
+    # The end of the transaction itself (commit or rollback) releases the locks. Not the
+    # release of a savepoint (SQLAlchemy's after_commit fires for that too), which keeps the
+    # locks and what was read under them: else every event of a broker batch, each in its
+    # savepoint, locked and read its section again.
+    if transaction.parent is None:
+        _locks_released(session)
 
 
 def _set_state(section: Section, state: str, at: datetime) -> None:

@@ -100,6 +100,27 @@ def test_a_run_whose_arrival_never_comes_can_be_resolved_once_the_train_behind_a
     resolve_all(line, dispatcher, [r1, r2])
 
 
+def test_the_train_behind_cannot_be_cleared_when_only_the_train_ahead_arrived(
+    line: Line, client: TestClient, session: Session, dispatcher: dict[str, str]
+) -> None:
+    """Found by an independent trial: the train ahead's arrival counted as "a train behind
+    arrived", so the dispatcher could clear the second train while it was still in the section
+    and the section was ``free``. Only a train that departed after this one proves it overtaken."""
+    r1, r2 = _two_trains(line)
+    assert arrive(line, ARRIVED, "2041")["run"] == r1
+    decide(line, dispatcher, r1, "keep_blocked")
+    decide(line, dispatcher, r1, "clear")
+    assert line.section()["state"] == "occupied" and line.section()["last_run_id"] == r2
+    answer = decide(line, dispatcher, r2, "clear", status=409)
+    assert "has not arrived" in answer["detail"], answer
+    decide(line, dispatcher, r2, "keep_blocked", status=409)
+    assert line.section()["state"] == "occupied"
+    login(client, session, "ivan")
+    assert 'value="clear"' not in client.get(f"/review?run={r2}").text  # not offered either
+    assert arrive(line, ARRIVED + timedelta(minutes=3), "2043")["run"] == r2
+    assert line.section()["state"] != "free"
+
+
 def test_an_arrival_before_its_departure_is_kept_for_the_late_departure(
     line: Line, dispatcher: dict[str, str]
 ) -> None:
