@@ -13,7 +13,7 @@ import pytest
 
 from service.cli import build_parser, main
 
-NOT_OURS = {"tail-train"}  # its options belong to the tail-check work
+NOT_OURS: set[str] = set()  # every command's numeric options are range-checked
 
 
 def _numeric_actions() -> Iterator[tuple[str, argparse.Action]]:
