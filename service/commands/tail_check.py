@@ -159,11 +159,9 @@ MAX_SYNTH_COUNT = 100_000
 SYNTH_COUNT = number(int, low=1, high=MAX_SYNTH_COUNT)
 KERNEL = number(low=0, high=1, low_open=True)  # a fraction of sqrt(W*H)
 # tail-train's bounds: generator B renders about one scene a second, so 100000 scenes per
-# split is already a day of rendering; more augmented copies than this add no new scenes.
+# split is already a day of rendering.
 MAX_TRAIN_COUNT = 100_000
-MAX_AUGMENT = 10
 TRAIN_COUNT = number(int, low=1, high=MAX_TRAIN_COUNT)
-AUGMENT = number(int, low=0, high=MAX_AUGMENT)
 
 
 def _parse_size(text: str) -> tuple[int, int] | None:
@@ -210,9 +208,7 @@ def _tail_train(args: argparse.Namespace) -> int:
         return fail(f"--out {out} must end in .json (the model is stored as JSON, never pickle)")
     if not out.parent.is_dir():
         return fail(f"folder {out.parent} does not exist; create it or choose another --out")
-    params = TrainParams(
-        train_count=args.count, validation_count=args.validation, augment=args.augment
-    )
+    params = TrainParams(train_count=args.count, validation_count=args.validation)
     try:
         model = train(generators, seed=args.seed, params=params)
     except ValueError as exc:
@@ -275,16 +271,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     p.add_argument("--out", required=True, help="model file to write (.json)")
     p.add_argument("--seed", type=SEED, default=0, help="random seed of the training")
     p.add_argument("--generators", default="AB", help="scene generators to train on: A, B or AB")
-    p.add_argument(
-        "--count", type=TRAIN_COUNT, default=200, help="training scenes per generator"
-    )
+    p.add_argument("--count", type=TRAIN_COUNT, default=200, help="training scenes per generator")
     p.add_argument(
         "--validation", type=TRAIN_COUNT, default=100, help="validation scenes per generator"
-    )
-    p.add_argument(
-        "--augment",
-        type=AUGMENT,
-        default=2,
-        help="randomised copies of every training and validation scene (domain randomisation)",
     )
     p.set_defaults(func=_tail_train)
