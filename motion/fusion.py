@@ -365,7 +365,8 @@ class TrackFilter:
             distance_to_next_marker_m=view.distance_m,
             last_marker_id=self._reader.last_read,
             missed_marker_ids=tuple(self._reader.missed),
-            section=self.table.section_at(s),
+            # An unknown position names no section: the placeholder coordinate is nowhere.
+            section=self.table.section_at(s) if known else None,
             gnss_age_s=None if last_gnss_t is None else e.t - last_gnss_t,
         )
 

@@ -16,7 +16,10 @@ from pydantic import BaseModel, ConfigDict, Field
 from core.errors import Unprocessable
 from motion import braking
 
-Number = Annotated[float, Field(allow_inf_nan=False)]
+# Strict, as the device protocol and the other people's APIs: true, "20" or 2.5 measurements
+# are refused, not read as 1, 20 and 2 (a JSON integer is a number).
+Number = Annotated[float, Field(allow_inf_nan=False, strict=True)]
+Count = Annotated[int, Field(strict=True)]
 
 
 class ErrorModelIn(BaseModel):
@@ -29,8 +32,8 @@ class ErrorModelIn(BaseModel):
         0.0, description="largest positive range error of one measurement, m"
     )
     p_l: Number = Field(1e-2, description="probability one measurement exceeds delta_l_max_m")
-    measurements: int = Field(1, description="measurements per channel (the smallest is used)")
-    channels: int = Field(1, description="independent channels")
+    measurements: Count = Field(1, description="measurements per channel (the smallest is used)")
+    channels: Count = Field(1, description="independent channels")
     measurement_time_s: Number = Field(0.0, description="duration of one measurement, s")
 
 

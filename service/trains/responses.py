@@ -36,4 +36,6 @@ class TrainPositionOut(BaseModel):
     distance_to_next_marker_m: float | None
     last_marker_id: str | None
     missed_marker_ids: list[str]
-    section: str | None
+    section: str | None = Field(
+        description="the section the train is in; null while the position is not known"
+    )

@@ -40,13 +40,13 @@ def _cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]
         ({"reaction_time_s": -1.0}, "reaction time"),
     ],
 )
-def test_braking_distance_refuses_naming_the_quantity(
-    kwargs: dict[str, float], named: str
-) -> None:
+def test_braking_distance_refuses_naming_the_quantity(kwargs: dict[str, float], named: str) -> None:
     args = {"speed_mps": 20.0, "deceleration_mps2": 1.0} | kwargs
     with pytest.raises(ValueError, match=named):
         braking.braking_plan(
-            args.pop("speed_mps"), args.pop("deceleration_mps2"), **args  # type: ignore[arg-type]
+            args.pop("speed_mps"),
+            args.pop("deceleration_mps2"),
+            **args,  # type: ignore[arg-type]
         )
 
 
@@ -71,9 +71,7 @@ def test_error_model_refuses_an_inverted_margin(kwargs: dict[str, float], named:
 def test_the_message_states_unit_and_range() -> None:
     with pytest.raises(ValueError) as e:
         braking.braking_distance(20.0, 1.0, 0.0, 2000.0)
-    assert str(e.value) == (
-        "gradient must be a finite number in [-70, 70] ‰ (got 2000)"
-    )
+    assert str(e.value) == ("gradient must be a finite number in [-70, 70] ‰ (got 2000)")
 
 
 def test_monte_carlo_refuses_a_speed_that_cannot_brake() -> None:
@@ -126,7 +124,20 @@ def test_plan_and_montecarlo_cli_refuse_the_speed(
 
 def test_a_valid_plan_still_meets_sil4(capsys: pytest.CaptureFixture[str]) -> None:
     rc, out, _ = _cli(
-        capsys, "braking", "plan", "--speed", "20", "--decel", "1", "--delta-l-max", "400",
-        "-k", "2", "--channels", "2", "--gradient", "-8",
+        capsys,
+        "braking",
+        "plan",
+        "--speed",
+        "20",
+        "--decel",
+        "1",
+        "--delta-l-max",
+        "400",
+        "-k",
+        "2",
+        "--channels",
+        "2",
+        "--gradient",
+        "-8",
     )
     assert rc == 0 and "meets SIL-4" in out

@@ -250,6 +250,9 @@ def test_unknown_start_found_by_first_marker() -> None:
     f = TrackFilter(table, FilterConfig(initial_position_m=None))
     st = f.step(0.0, 0.0)
     assert not st.position_known and st.reader_on
+    # Found by an independent trial: an unknown position still named a section (the one at
+    # the filter's placeholder coordinate), as if the train were known to be in it.
+    assert st.section is None
     st = f.step(0.1, 0.0, marker_id="M3")
     assert st.position_known
     assert st.position_m == pytest.approx(3000.0, abs=1.0)

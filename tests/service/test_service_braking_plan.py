@@ -83,3 +83,22 @@ def test_the_cli_and_the_api_answer_from_one_builder(
     assert answer.status_code == 200, answer.text
     assert len(built) == 2 and built[0] == built[1]
     assert from_cli == answer.json()
+
+
+def test_a_plan_reads_numbers_strictly(client: TestClient) -> None:
+    """Found by an independent trial: ``"speed_mps": true`` planned at 1 m/s, ``"20"`` and
+    ``"measurements": "3"`` were taken as numbers. The people's APIs read JSON strictly (as
+    device events do): a boolean, a string or a fractional count is refused, naming the field."""
+    for field, value in (("speed_mps", True), ("speed_mps", "20"), ("deceleration_mps2", "1")):
+        body = {"speed_mps": 20, "deceleration_mps2": 1.0, field: value}
+        answer = client.post(URL, json=body, headers=ADMIN)
+        assert answer.status_code == 422, (field, value, answer.text)
+        assert answer.headers["content-type"].startswith("application/problem+json")
+        assert field in answer.text
+    for field, value in (("measurements", "3"), ("channels", 2.5), ("p_s", False)):
+        body = {"speed_mps": 20, "deceleration_mps2": 1.0, "errors": {field: value}}
+        answer = client.post(URL, json=body, headers=ADMIN)
+        assert answer.status_code == 422, (field, value, answer.text)
+        assert field in answer.text
+    whole = {"speed_mps": 20, "deceleration_mps2": 1, "errors": {"measurements": 3}}
+    assert client.post(URL, json=whole, headers=ADMIN).status_code == 200
