@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 from typing import Any
 
-from sqlalchemy import and_, or_, select
+from sqlalchemy import Select, and_, or_, select
 from sqlalchemy.orm import Session
 
 from ingest.models import Snapshot
@@ -100,22 +100,25 @@ def owner(candidates: Sequence[Run], at: datetime, station: str) -> Run | None:
     return max(after, key=lambda r: (r.arrived_at, r.id)) if after else None
 
 
+def _owners(section: str, start: datetime, end: datetime) -> Select[Any]:
+    """The query of the runs of ``section`` that could own evidence dated from ``start`` to
+    ``end``, latest departure first (one filter for :func:`candidates` and :func:`_spanning`)."""
+    return (
+        select(Run)
+        .where(Run.section == section, Run.departed_at <= end + WINDOWS.before_departure)
+        .where(
+            or_(
+                Run.arrived_at >= start - WINDOWS.after_arrival,
+                and_(Run.arrived_at.is_(None), Run.status.in_(IN_SECTION)),
+            )
+        )
+        .order_by(Run.departed_at.desc(), Run.id.desc())
+    )
+
+
 def candidates(session: Session, section: str, start: datetime, end: datetime) -> list[Run]:
     """The section's latest runs that could own evidence dated from ``start`` to ``end``."""
-    return list(
-        session.scalars(
-            select(Run)
-            .where(Run.section == section, Run.departed_at <= end + WINDOWS.before_departure)
-            .where(
-                or_(
-                    Run.arrived_at >= start - WINDOWS.after_arrival,
-                    and_(Run.arrived_at.is_(None), Run.status.in_(IN_SECTION)),
-                )
-            )
-            .order_by(Run.departed_at.desc(), Run.id.desc())
-            .limit(CANDIDATES)
-        )
-    )
+    return list(session.scalars(_owners(section, start, end).limit(CANDIDATES)))
 
 
 def _eligible(run: Run, at: datetime) -> bool:
@@ -167,19 +170,7 @@ def run_at(session: Session, section: str, at: datetime, station: str) -> Run | 
 def _spanning(session: Session, section: str, start: datetime, end: datetime) -> list[Run]:
     """Every run of the section that :func:`candidates` could give for an instant from
     ``start`` to ``end`` (no limit), latest departure first."""
-    return list(
-        session.scalars(
-            select(Run)
-            .where(Run.section == section, Run.departed_at <= end + WINDOWS.before_departure)
-            .where(
-                or_(
-                    Run.arrived_at >= start - WINDOWS.after_arrival,
-                    and_(Run.arrived_at.is_(None), Run.status.in_(IN_SECTION)),
-                )
-            )
-            .order_by(Run.departed_at.desc(), Run.id.desc())
-        )
-    )
+    return list(session.scalars(_owners(section, start, end)))
 
 
 def reclaim(session: Session, run: Run) -> tuple[int, set[int]]:
