@@ -30,7 +30,16 @@ class TrainPositionOut(BaseModel):
         description="false when the speed's uncertainty is too large to use (e.g. before the"
         " first GNSS speed of a train first seen while moving): a person must look"
     )
-    position_known: bool = Field(description="false when the uncertainty is too large to use")
+    position_known: bool = Field(
+        description="false when the uncertainty is too large to use, or the position is stale"
+    )
+    age_s: float = Field(
+        description="seconds from the newest sample's device time to the server's now"
+    )
+    stale: bool = Field(
+        description="no sample for longer than DEPOT_HEARTBEAT_S: position, speed and section"
+        " are then not known (position_known and speed_known false, section null)"
+    )
     reader_on: bool
     next_marker_id: str | None
     distance_to_next_marker_m: float | None

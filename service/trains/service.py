@@ -8,8 +8,10 @@ from sqlalchemy import select
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
+from core.database import utcnow
 from core.errors import Conflict, NotFound, Unprocessable
 from core.models import Section
+from core.settings import get_settings
 from motion.fusion import FilterConfig, Marker, MarkerTable, StaleSampleError, TrackFilter
 from service.trains.models import TrackMarker, TrainPosition
 from service.trains.schemas import MarkerIn
@@ -83,9 +85,19 @@ def position(session: Session, train: str) -> dict[str, Any]:
     # Stated on every answer (also for states stored before the field existed):
     # a speed whose σ is beyond FilterConfig.lost_speed_sigma is not known.
     known = float(row.state["sigma_speed_mps"]) <= FilterConfig().lost_speed_sigma
-    return {
+    answer = {
         "train": train,
         "updated_at": row.updated_at.isoformat(),
         **row.state,
         "speed_known": known,
     }
+    # The state is the train's as of its newest sample: once its on-board unit is silent for
+    # longer than any device may be (DEPOT_HEARTBEAT_S, by the server's clock against the
+    # sample's time), where the train is now and how fast it goes are not known — a person
+    # must look, rather than read an old coordinate with its old, small uncertainty.
+    age_s = (utcnow() - row.updated_at).total_seconds()
+    stale = age_s > get_settings().heartbeat_s
+    answer |= {"age_s": age_s, "stale": stale}
+    if stale:
+        answer |= {"position_known": False, "speed_known": False, "section": None}
+    return answer

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from datetime import timedelta
 
+import pytest
 from fastapi.testclient import TestClient
 
 from tests.conftest import ADMIN
+from tests.service.clock import ServerClock, server_clock  # noqa: F401 (fixture)
 from tests.service.linekit import build_line, post_ok
 from tests.service.scenario import T0, iso
 
@@ -42,7 +44,11 @@ def samples(seconds: int, markers: dict[float, str]) -> list[dict]:
     return out
 
 
-def test_position_follows_markers_and_gnss(client: TestClient) -> None:
+def test_position_follows_markers_and_gnss(
+    client: TestClient,
+    server_clock: ServerClock,  # noqa: F811
+) -> None:
+    server_clock.set(T0 + timedelta(seconds=91))  # a second after the newest sample
     keys = build_line(client)
     for ident, track_m in (("M0", 0.0), ("M1", 600.0), ("M2", 2400.0)):
         post_ok(client, "/api/v1/markers", {"id": ident, "track_m": track_m, "section": "AB"})
@@ -86,7 +92,11 @@ def _moving_start(seconds: int, speed: float) -> list[dict]:
     ]
 
 
-def test_a_train_seen_first_while_moving_follows_gnss(client: TestClient) -> None:
+def test_a_train_seen_first_while_moving_follows_gnss(
+    client: TestClient,
+    server_clock: ServerClock,  # noqa: F811
+) -> None:
+    server_clock.set(T0 + timedelta(seconds=1))
     keys = build_line(client)
     first = client.post(
         "/api/v1/events", json={"events": _moving_start(1, 15.0)}, headers=keys["T-obu"]
@@ -96,6 +106,7 @@ def test_a_train_seen_first_while_moving_follows_gnss(client: TestClient) -> Non
     # one sample, its GNSS speed older than the filter: the speed is not known yet
     assert position["speed_known"] is False and position["direction"] == 0
     batch = _moving_start(300, 15.0)[1:]
+    server_clock.set(T0 + timedelta(seconds=300))
     response = client.post("/api/v1/events", json={"events": batch}, headers=keys["T-obu"])
     assert response.status_code == 200
     position = client.get("/api/v1/trains/T7/position", headers=ADMIN).json()
@@ -111,7 +122,10 @@ def test_an_impossible_clock_is_refused_naming_t(client: TestClient) -> None:
     assert "t must be within" in text and "cannot be stored" not in text, text
 
 
-def test_an_on_board_restart_is_followed_through_the_api(client: TestClient) -> None:
+def test_an_on_board_restart_is_followed_through_the_api(
+    client: TestClient,
+    server_clock: ServerClock,  # noqa: F811
+) -> None:
     """The unit reboots after 100 s: its clock starts again at 0.5 s.  The first
     samples after it are refused as old, then the restart is taken (the count kept
     in the train's stored filter between samples) and the speed follows GNSS again."""
@@ -122,9 +136,37 @@ def test_an_on_board_restart_is_followed_through_the_api(client: TestClient) -> 
         | {"event_id": f"rb-{i}", "t": 0.5 + i, "occurred_at": iso(T0 + timedelta(seconds=101 + i))}
         for i, body in enumerate(_moving_start(20, 15.0))
     ]
+    server_clock.set(T0 + timedelta(seconds=121))
     for batch in (before, after):
         response = client.post("/api/v1/events", json={"events": batch}, headers=keys["T-obu"])
         assert response.status_code == 200
     position = client.get("/api/v1/trains/T7/position", headers=ADMIN).json()
     assert position["t"] == 19.5, position
     assert position["speed_known"] is True and abs(position["speed_mps"] - 15.0) < 0.5
+
+
+def test_a_position_no_sample_has_renewed_is_not_known(
+    client: TestClient,
+    server_clock: ServerClock,  # noqa: F811
+) -> None:
+    """Found by an independent trial: 90 s after a train's last sample its old coordinate
+    was still "known" with σ 0.4 m, although the train had run 1.8 km on. A unit silent for
+    longer than any device may be (DEPOT_HEARTBEAT_S) gives no position, speed or section."""
+    keys = build_line(client)
+    for ident, track_m in (("M0", 0.0), ("M1", 600.0), ("M2", 2400.0)):
+        post_ok(client, "/api/v1/markers", {"id": ident, "track_m": track_m, "section": "AB"})
+    server_clock.set(T0 + timedelta(seconds=90))
+    batch = samples(90, {0.0: "M0", 600.0: "M1"})
+    response = client.post("/api/v1/events", json={"events": batch}, headers=keys["T-obu"])
+    assert response.status_code == 200
+    newest = T0 + timedelta(seconds=89.9)
+    server_clock.set(newest + timedelta(seconds=30))
+    fresh = client.get("/api/v1/trains/2041/position", headers=ADMIN).json()
+    assert fresh["stale"] is False and fresh["position_known"] and fresh["section"] == "AB"
+    assert fresh["age_s"] == pytest.approx(30.0, abs=0.01)
+    for late in (61.0, 90.0, 3600.0):
+        server_clock.set(newest + timedelta(seconds=late))
+        old = client.get("/api/v1/trains/2041/position", headers=ADMIN).json()
+        assert old["stale"] is True, (late, old)
+        assert old["position_known"] is False and old["speed_known"] is False, old
+        assert old["section"] is None, old
