@@ -11,7 +11,7 @@ from core.database import DbSession, utcnow
 from core.errors import DepotError
 from service.fleet import service, views
 from service.fleet.chart import cached_chart
-from service.reasons import meaningful
+from service.reasons import RULE, meaningful
 from service.review import sessions
 from service.review.router import COOKIE, _who, templates
 
@@ -95,7 +95,7 @@ def fleet_decide(
     if who is None or who.role not in DECIDERS:
         return RedirectResponse("/review/login", status_code=303)
     if action not in ACTION_WORDS or (kept := meaningful(reason)) is None:
-        notice = "Give a reason of at least 3 characters."
+        notice = f"Give {RULE}."
     else:
         try:
             service.record_override(session, car_id, action, kept, who, utcnow())

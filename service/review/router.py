@@ -25,7 +25,7 @@ from service.clearance.router import (
     get_snapshot_overlay,
 )
 from service.clearance.service import ACTION_STATES
-from service.reasons import meaningful
+from service.reasons import RULE, meaningful
 from service.review import sessions
 from service.review.service import (
     ACTION_LABELS,
@@ -186,7 +186,7 @@ def _decide(
     if who.role not in DECIDERS:
         return "Only a dispatcher may clear or block a section.", "error"
     if action not in DONE_WORDS or (kept := meaningful(reason)) is None:
-        return "Give a reason of at least 3 characters. Nothing was recorded.", "error"
+        return f"Give {RULE}. Nothing was recorded.", "error"
     refused = _refusal(session, run_id, action)
     if refused:
         return refused, "error"

@@ -78,6 +78,19 @@ def test_missing_tail_image_needs_review_and_dispatcher_decides(
         f"/api/v1/runs/{run}/decision", json={"action": "clear", "reason": " "}, headers=dispatcher
     )
     assert no_reason.status_code == 422
+    # Found by an independent trial: "..." passed as a reason. A reason says something: at
+    # least three letters or digits, in any alphabet; the form says the same rule.
+    for empty in ("...", "!!!!", " - . ", "ok", "ОК!"):
+        said = line.client.post(
+            f"/api/v1/runs/{run}/decision",
+            json={"action": "clear", "reason": empty},
+            headers=dispatcher,
+        )
+        assert said.status_code == 422 and "letters or digits" in said.text, (empty, said.text)
+    form = line.client.post(
+        f"/review/runs/{run}/decision", data={"action": "clear", "reason": "..."}
+    )
+    assert line.section()["state"] == "review", form.text
     engineer = line.client.post(
         f"/api/v1/runs/{run}/decision",
         json={"action": "clear", "reason": "seen it"},

@@ -224,7 +224,7 @@ def test_review_fleet_page_behind_login(stored: list[str], client: TestClient) -
     short = client.post(
         f"/review/fleet/cars/{stored[1]}/decision", data={"action": "withdraw_now", "reason": "x"}
     )
-    assert "Give a reason of at least 3 characters." in short.text
+    assert "Give a reason of at least 3 letters or digits." in short.text
     decided = client.post(
         f"/review/fleet/cars/{stored[1]}/decision",
         data={"action": "withdraw_now", "reason": "compressor fill time creeping up"},

@@ -244,7 +244,7 @@ def test_review_screen_shows_sweep_button_state_sweep_run_and_eot(line: Line) ->
     page = client.get(f"/review?run={original}").text
     assert 'name="action" value="sweep"' in page and "Clear after a sweep train" in page
     short = client.post(f"/review/runs/{original}/decision", data={"action": "sweep", "reason": ""})
-    assert "Give a reason of at least 3 characters." in short.text
+    assert "Give a reason of at least 3 letters or digits." in short.text
     assert line.section()["state"] == "review"
     done = client.post(
         f"/review/runs/{original}/decision",
