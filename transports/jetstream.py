@@ -4,7 +4,7 @@ Devices (or their station's leaf node) publish to ``{prefix}.events.{device_id}`
 header ``Depot-Device-Key``. Every ``depot consume`` process binds the same durable consumer
 ``depot-ingest``, so the stream's messages are split between them; each message is acked only
 after the transaction that stored it has committed. A message a consumer never acked comes
-again after ``ack_wait``; one that failed ``max_deliver`` times goes, with the reason, to
+again after ``ack_wait``; one delivered ``max_deliver`` times without being stored goes, with the reason, to
 ``{prefix}.dead.{device_id}`` (kept in its own stream), never silently dropped.
 """
 
@@ -89,15 +89,17 @@ async def ensure_streams(js: JetStreamContext, config: ConsumeConfig) -> None:
 
 
 async def ensure_consumer(js: JetStreamContext, config: ConsumeConfig) -> None:
-    # One delivery more than allowed: the extra one is seen by us and dead-lettered with its
-    # reason (JetStream itself would only stop delivering it).
+    # No bound on the server: JetStream counts deliveries a consumer never saw (one killed
+    # holding its batch, a fetch that expired as the message arrived) and, at its bound, would
+    # stop delivering without telling anyone. We bound deliveries ourselves (``_handle``): every
+    # message is either stored or dead-lettered with its reason.
     await js.add_consumer(
         config.names.stream,
         ConsumerConfig(
             durable_name=CONSUMER,
             ack_policy=AckPolicy.EXPLICIT,
             ack_wait=config.ack_wait_s,
-            max_deliver=config.max_deliver + 1,
+            max_deliver=-1,
             filter_subject=config.names.events,
             max_ack_pending=max(1000, 4 * config.batch),
         ),
@@ -120,9 +122,8 @@ class Consumer:
         self.stopping = asyncio.Event()
         self.stats = BatchStats(log)
 
-    async def _dead_letter(self, js: JetStreamContext, msg: Msg) -> None:
+    async def _dead_letter(self, js: JetStreamContext, msg: Msg, deliveries: int) -> None:
         sequence = msg.metadata.sequence.stream
-        deliveries = msg.metadata.num_delivered - 1
         reason = self.failures.pop(
             sequence, "not acknowledged in time (the consumer stopped or the database was down)"
         )
@@ -135,11 +136,19 @@ class Consumer:
         log.error("message %d from %s dead-lettered: %s", sequence, device_id, reason)
         await msg.ack()
 
-    async def _settle(self, nc: NATS, msg: Msg, answer: Answer) -> None:
+    async def _retry(self, js: JetStreamContext, msg: Msg) -> None:
+        """A failed delivery comes again later, unless it was the last one allowed."""
+        delivered = msg.metadata.num_delivered
+        if delivered >= self.config.max_deliver:
+            await self._dead_letter(js, msg, delivered)
+        else:
+            await msg.nak(delay=min(2.0**delivered, MAX_NAK_DELAY_S))
+
+    async def _settle(self, nc: NATS, js: JetStreamContext, msg: Msg, answer: Answer) -> None:
         sequence = msg.metadata.sequence.stream
         if answer.retry:
             self.failures[sequence] = str(answer.body.get("detail"))
-            await msg.nak(delay=min(2.0**msg.metadata.num_delivered, MAX_NAK_DELAY_S))
+            await self._retry(js, msg)
             return
         self.failures.pop(sequence, None)
         device_id = _message(msg).device_id
@@ -149,8 +158,8 @@ class Consumer:
     async def _handle(self, nc: NATS, js: JetStreamContext, msgs: list[Msg]) -> None:
         live = []
         for msg in msgs:
-            if msg.metadata.num_delivered > self.config.max_deliver:
-                await self._dead_letter(js, msg)
+            if msg.metadata.num_delivered > self.config.max_deliver:  # earlier ones unanswered
+                await self._dead_letter(js, msg, msg.metadata.num_delivered - 1)
             else:
                 live.append(msg)
         if not live:
@@ -168,11 +177,11 @@ class Consumer:
             log.warning("database unavailable (%s); %d messages come again", exc, len(live))
             for msg in live:
                 self.failures[msg.metadata.sequence.stream] = f"database unavailable ({exc})"
-                await msg.nak(delay=min(2.0**msg.metadata.num_delivered, MAX_NAK_DELAY_S))
+                await self._retry(js, msg)
             return
         self.stats.record(len(live), time.monotonic() - started)
         for msg, answer in zip(live, answers, strict=True):
-            await self._settle(nc, msg, answer)
+            await self._settle(nc, js, msg, answer)
 
     async def run(self) -> None:
         """Consume until SIGTERM or SIGINT; the batch in hand is finished first."""

@@ -6,8 +6,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from typing import Any
+
+import nats
+
 from tests.reliability.relkit import depot_env
-from tests.transports.tkit import RunNames, brokers, consumer, until
+from tests.transports.tkit import NatsDevices, RunNames, brokers, consumer, until
 
 UNREACHABLE = "postgresql+psycopg://postgres@127.0.0.1:1/nowhere"  # nothing listens on port 1
 
@@ -40,4 +44,55 @@ def test_undeliverable_message_goes_to_dead_letters_with_reason(tmp_path: Path) 
     assert letter.data == payload  # as the device sent it, so an operator can send it again
     reason = letter.headers["Depot-Dead-Reason"]
     assert "failed 2 deliveries" in reason and "database unavailable" in reason, reason
+    assert (info.num_ack_pending, info.num_pending) == (0, 0), "the dead letter was not acked"
+
+
+def _lose_deliveries(devices: NatsDevices, stream: str, count: int, ack_wait_s: float) -> None:
+    """Take ``count`` deliveries from the shared durable and never answer them, as a consumer
+    killed while holding its batch (or a fetch that expired as the message arrived) does."""
+
+    async def lose() -> None:
+        sub: Any = await devices.nc.jetstream().pull_subscribe_bind("depot-ingest", stream=stream)
+        lost = 0
+        while lost < count:
+            try:
+                lost += len(await sub.fetch(1, timeout=ack_wait_s * 3))
+            except nats.errors.TimeoutError:
+                continue
+        await sub.unsubscribe()
+
+    devices.call(lose(), timeout=60)
+
+
+def test_deliveries_lost_elsewhere_never_leave_a_message_stuck(tmp_path: Path) -> None:
+    """JetStream counts a delivery whether or not a consumer saw it. If the server's own bound
+    stopped redelivery, a message whose deliveries were lost would sit unacked for ever, in no
+    dead letter: the consumer itself bounds deliveries and dead-letters what exceeds them."""
+    names = RunNames()
+    with brokers(names) as (_, __, devices):
+        env = {
+            **depot_env(UNREACHABLE, tmp_path),
+            **names.env(),
+            "DEPOT_NATS_MAX_DELIVER": "2",
+            "DEPOT_NATS_ACK_WAIT_S": "1",
+        }
+        worker = consumer(env, tmp_path, 0)
+        worker.start()  # creates the stream and the durable consumer
+        worker.stop()
+        stream = f"{names.nats_prefix.upper()}_EVENTS"
+        event = {"event_id": "dl-2", "occurred_at": "2026-11-23T06:00:00Z", "kind": "heartbeat"}
+        payload = json.dumps(event).encode()
+        devices.publish_all([("A-cam-1", "some-key", payload)])
+        _lose_deliveries(devices, stream, 3, 1.0)
+        worker.start()
+        try:
+            dead_stream = f"{names.nats_prefix.upper()}_DEAD"
+            until(lambda: devices.stream_messages(dead_stream) > 0, within=60, what="a dead letter")
+            letters = devices.dead_letters(dead_stream, f"{names.nats_prefix}.dead.*")
+            info = devices.consumer_info(stream, "depot-ingest")
+        finally:
+            worker.stop()
+    (letter,) = letters
+    assert letter.data == payload
+    assert "not acknowledged in time" in letter.headers["Depot-Dead-Reason"]
     assert (info.num_ack_pending, info.num_pending) == (0, 0), "the dead letter was not acked"
