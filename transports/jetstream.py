@@ -4,8 +4,8 @@ Devices (or their station's leaf node) publish to ``{prefix}.events.{device_id}`
 header ``Depot-Device-Key``. Every ``depot consume`` process binds the same durable consumer
 ``depot-ingest``, so the stream's messages are split between them; each message is acked only
 after the transaction that stored it has committed. A message a consumer never acked comes
-again after ``ack_wait``; one delivered ``max_deliver`` times without being stored goes, with the reason, to
-``{prefix}.dead.{device_id}`` (kept in its own stream), never silently dropped.
+again after ``ack_wait``; one delivered ``max_deliver`` times without being stored goes, with
+the reason, to ``{prefix}.dead.{device_id}`` (kept in its own stream), never silently dropped.
 """
 
 from __future__ import annotations
