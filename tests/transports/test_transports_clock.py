@@ -12,11 +12,11 @@ from datetime import UTC, datetime, timedelta
 from sqlalchemy import Engine, select
 from sqlalchemy.orm import Session, sessionmaker
 
-from core.auth import hash_secret
-from core.models import Device, Station
+from core.models import Device
 from ingest.liveness import heartbeat_limit, is_stale, silent_at
 from ingest.models import RawEvent
 from service import features
+from tests.transports.tkit import register_devices
 from transports.envelope import Message, handle_batch
 
 FAR_PAST = datetime(2001, 1, 1, 6, 0, tzinfo=UTC)
@@ -38,15 +38,7 @@ def _devices(sessions: sessionmaker[Session], names: list[str]) -> dict[str, tup
     """A registered device per case: (device id, key) by case name."""
     tag = uuid.uuid4().hex[:8]
     made = {name: (f"clk-{tag}-{name}", f"key-{tag}-{name}") for name in names}
-    with sessions.begin() as session:
-        session.add(Station(id=f"C{tag}", name="C"))
-        session.flush()
-        for device_id, key in made.values():
-            session.add(
-                Device(
-                    id=device_id, station=f"C{tag}", kind="axle_counter", key_hash=hash_secret(key)
-                )
-            )
+    register_devices(sessions, f"C{tag}", dict(made.values()))
     return made
 
 

@@ -10,39 +10,53 @@ from typing import Any
 import nats
 
 from tests.reliability.relkit import depot_env
-from tests.transports.tkit import NatsDevices, RunNames, brokers, consumer, until
+from tests.transports.tkit import NatsDevices, Process, RunNames, brokers, consumer, until
 
 UNREACHABLE = "postgresql+psycopg://postgres@127.0.0.1:1/nowhere"  # nothing listens on port 1
+MAX_DELIVER = 2
+
+
+def _failing_consumer(names: RunNames, tmp_path: Path) -> Process:
+    """A consumer whose database is unreachable: every delivery fails, quickly redelivered."""
+    env = {
+        **depot_env(UNREACHABLE, tmp_path),
+        **names.env(),
+        "DEPOT_NATS_MAX_DELIVER": str(MAX_DELIVER),
+        "DEPOT_NATS_ACK_WAIT_S": "1",
+    }
+    return consumer(env, tmp_path, 0)
+
+
+def _heartbeat(event_id: str) -> bytes:
+    event = {"event_id": event_id, "occurred_at": "2026-11-23T06:00:00Z", "kind": "heartbeat"}
+    return json.dumps(event).encode()
+
+
+def _dead_letters(names: RunNames, devices: NatsDevices) -> tuple[list[Any], Any]:
+    """Waits for the dead letter; the letters and the events consumer's state after it."""
+    dead_stream = f"{names.nats_prefix.upper()}_DEAD"
+    until(lambda: devices.stream_messages(dead_stream) > 0, within=60, what="a dead letter")
+    letters = devices.dead_letters(dead_stream, f"{names.nats_prefix}.dead.*")
+    stream = f"{names.nats_prefix.upper()}_EVENTS"
+    return letters, devices.consumer_info(stream, "depot-ingest")
 
 
 def test_undeliverable_message_goes_to_dead_letters_with_reason(tmp_path: Path) -> None:
     names = RunNames()
     with brokers(names) as (_, __, devices):
-        env = {
-            **depot_env(UNREACHABLE, tmp_path),
-            **names.env(),
-            "DEPOT_NATS_MAX_DELIVER": "2",
-            "DEPOT_NATS_ACK_WAIT_S": "1",
-        }
-        worker = consumer(env, tmp_path, 0)
+        worker = _failing_consumer(names, tmp_path)
         worker.start()
         try:
-            event = {"event_id": "dl-1", "occurred_at": "2026-11-23T06:00:00Z",
-                     "kind": "heartbeat"}  # fmt: skip
-            payload = json.dumps(event).encode()
+            payload = _heartbeat("dl-1")
             devices.publish_all([("A-cam-1", "some-key", payload)])
-            dead_stream = f"{names.nats_prefix.upper()}_DEAD"
-            until(lambda: devices.stream_messages(dead_stream) > 0, within=60, what="a dead letter")
-            letters = devices.dead_letters(dead_stream, f"{names.nats_prefix}.dead.*")
-            stream = f"{names.nats_prefix.upper()}_EVENTS"
-            info = devices.consumer_info(stream, "depot-ingest")
+            letters, info = _dead_letters(names, devices)
         finally:
             worker.stop()
     (letter,) = letters
     assert letter.subject == f"{names.nats_prefix}.dead.A-cam-1"
     assert letter.data == payload  # as the device sent it, so an operator can send it again
     reason = letter.headers["Depot-Dead-Reason"]
-    assert "failed 2 deliveries" in reason and "database unavailable" in reason, reason
+    assert f"failed {MAX_DELIVER} deliveries" in reason and "database unavailable" in reason
     assert (info.num_ack_pending, info.num_pending) == (0, 0), "the dead letter was not acked"
 
 
@@ -69,26 +83,15 @@ def test_deliveries_lost_elsewhere_never_leave_a_message_stuck(tmp_path: Path) -
     dead letter: the consumer itself bounds deliveries and dead-letters what exceeds them."""
     names = RunNames()
     with brokers(names) as (_, __, devices):
-        env = {
-            **depot_env(UNREACHABLE, tmp_path),
-            **names.env(),
-            "DEPOT_NATS_MAX_DELIVER": "2",
-            "DEPOT_NATS_ACK_WAIT_S": "1",
-        }
-        worker = consumer(env, tmp_path, 0)
+        worker = _failing_consumer(names, tmp_path)
         worker.start()  # creates the stream and the durable consumer
         worker.stop()
-        stream = f"{names.nats_prefix.upper()}_EVENTS"
-        event = {"event_id": "dl-2", "occurred_at": "2026-11-23T06:00:00Z", "kind": "heartbeat"}
-        payload = json.dumps(event).encode()
+        payload = _heartbeat("dl-2")
         devices.publish_all([("A-cam-1", "some-key", payload)])
-        _lose_deliveries(devices, stream, 3, 1.0)
+        _lose_deliveries(devices, f"{names.nats_prefix.upper()}_EVENTS", MAX_DELIVER + 1, 1.0)
         worker.start()
         try:
-            dead_stream = f"{names.nats_prefix.upper()}_DEAD"
-            until(lambda: devices.stream_messages(dead_stream) > 0, within=60, what="a dead letter")
-            letters = devices.dead_letters(dead_stream, f"{names.nats_prefix}.dead.*")
-            info = devices.consumer_info(stream, "depot-ingest")
+            letters, info = _dead_letters(names, devices)
         finally:
             worker.stop()
     (letter,) = letters

@@ -12,10 +12,11 @@ from typing import Any
 from sqlalchemy import Engine, event, select
 from sqlalchemy.orm import Session, sessionmaker
 
-from core.auth import device_cache, hash_secret
-from core.models import Device, Station
+from core.auth import device_cache
+from core.models import Device
 from ingest.models import RawEvent
 from service import features
+from tests.transports.tkit import register_devices
 from transports.envelope import Message, handle_batch
 
 
@@ -32,15 +33,7 @@ def test_a_batch_of_several_devices_is_stored_once_with_its_receive_times(
     sessions = committed
     tag = uuid.uuid4().hex[:8]
     keys = {f"st-{tag}-{n}": f"key-{tag}-{n}" for n in range(2)}
-    with sessions.begin() as session:
-        session.add(Station(id=f"S{tag}", name="S"))
-        session.flush()
-        for device_id, key in keys.items():
-            session.add(
-                Device(
-                    id=device_id, station=f"S{tag}", kind="axle_counter", key_hash=hash_secret(key)
-                )
-            )
+    register_devices(sessions, f"S{tag}", keys)
     one, two = list(keys)
     waited = datetime.now(UTC) - timedelta(minutes=3)  # when the broker got the first one
     batch = [
@@ -83,15 +76,7 @@ def test_the_keys_a_batch_looked_up_are_cached_for_the_next(
     features.install()
     tag = uuid.uuid4().hex[:8]
     keys = {f"kc-{tag}-{n}": f"key-{tag}-{n}" for n in range(3)}
-    with committed.begin() as session:
-        session.add(Station(id=f"K{tag}", name="K"))
-        session.flush()
-        for device_id, key in keys.items():
-            session.add(
-                Device(
-                    id=device_id, station=f"K{tag}", kind="axle_counter", key_hash=hash_secret(key)
-                )
-            )
+    register_devices(committed, f"K{tag}", keys)
     first = [Message(d, k, _heartbeat(f"{d}-1")) for d, k in keys.items()]
     assert [a.status for a in handle_batch(committed, first, transport="mqtt", max_bytes=4096)] == [
         201

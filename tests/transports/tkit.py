@@ -30,7 +30,10 @@ from nats.js.errors import NotFoundError
 from paho.mqtt.enums import CallbackAPIVersion, MQTTProtocolVersion
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
+from sqlalchemy.orm import Session, sessionmaker
 
+from core.auth import hash_secret
+from core.models import Device, Station
 from tests.reliability.relkit import DEPOT
 
 MQTT_HOST, MQTT_PORT = "127.0.0.1", 1883
@@ -311,3 +314,14 @@ def until(condition: Callable[[], bool], *, within: float, what: str) -> None:
             return
         time.sleep(0.1)
     raise AssertionError(f"waited {within} s in vain for: {what}")
+
+
+def register_devices(sessions: sessionmaker[Session], station: str, keys: dict[str, str]) -> None:
+    """A station and its axle counters, each with its key (device id → key), committed."""
+    with sessions.begin() as session:
+        session.add(Station(id=station, name=station))
+        session.flush()
+        session.add_all(
+            Device(id=d, station=station, kind="axle_counter", key_hash=hash_secret(k))
+            for d, k in keys.items()
+        )
