@@ -13,6 +13,7 @@ from ingest.handlers import HandlerTable, ValidatorTable
 from service.clearance import handlers as clearance
 from service.clearance import tail
 from service.fleet import handlers as fleet
+from service.setup import service as setup
 from service.trains import handlers as trains
 
 HANDLER_TABLE: HandlerTable = {
@@ -41,3 +42,4 @@ VALIDATOR_TABLE: ValidatorTable = {
 def install() -> None:
     """Install the tables into ingest (idempotent); called by the app factory and the CLI."""
     ingest_handlers.install(HANDLER_TABLE, VALIDATOR_TABLE)
+    setup.CAR_REGISTERED[:] = [fleet.derive_waiting]

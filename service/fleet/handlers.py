@@ -2,14 +2,20 @@
 
 from __future__ import annotations
 
+import logging
 from typing import Any
 
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from core.models import Car
+from core.models import Car, Device
 from ingest.handlers import Derivation
+from ingest.models import RawEvent
+from ingest.schemas import EVENT_ADAPTER
 from service.fleet.rules import refuse_implausible, registered, value_problems
 from service.fleet.service import is_repeated_test, store_test
+
+log = logging.getLogger("depot.fleet")
 
 
 def measurement_values(session: Session, event: Any) -> None:
@@ -28,7 +34,10 @@ def measurement(d: Derivation) -> dict[str, Any]:
         return {
             "car": car_id,
             "measurements": 0,
-            "warning": f"car {car_id!r} is not registered; register it with POST /api/v1/cars",
+            "warning": (
+                f"car {car_id!r} is not registered; register it with POST /api/v1/cars"
+                " and this test is stored then"
+            ),
         }
     refused = value_problems(registered(d.session), d.event.values)
     if refused:
@@ -46,3 +55,27 @@ def measurement(d: Derivation) -> dict[str, Any]:
     if not stored:
         return {"car": car_id, "measurements": 0, "note": "this test is already stored"}
     return {"car": car_id, "measurements": stored}
+
+
+def derive_waiting(session: Session, car_id: str) -> int:
+    """Derive the ``measurement`` events stored while ``car_id`` was not registered (their
+    raw rows were kept for this), in the order they were received; returns how many tests
+    were stored. Called when the car is registered, so the warning's promise holds without a
+    replay; what the devices were told (``raw.result``) is never rewritten."""
+    waiting = session.scalars(
+        select(RawEvent)
+        .where(RawEvent.kind == "measurement", RawEvent.body["car"].as_string() == car_id)
+        .order_by(RawEvent.id)
+    ).all()
+    stored = 0
+    for raw in waiting:
+        device = session.get_one(Device, raw.device_id)
+        event = EVENT_ADAPTER.validate_python(raw.body)
+        try:
+            with session.begin_nested():  # one event that no longer derives leaves the others
+                answer = measurement(Derivation(session, raw, event, device, replaying=True))
+        except Exception:  # as replay does: the raw row stays, the car is still registered
+            log.exception("measurement event %d for car %s did not derive", raw.id, car_id)
+            continue
+        stored += 1 if answer.get("measurements") else 0
+    return stored

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from datetime import datetime
 from typing import Any
 
@@ -79,7 +80,13 @@ def create_device(session: Session, data: DeviceIn, *, actor: str) -> tuple[Devi
     return device, key
 
 
+# What the features do once a car exists (e.g. derive the measurements that waited for it);
+# filled by ``service.features.install``, so that setup need not know the features.
+CAR_REGISTERED: list[Callable[[Session, str], object]] = []
+
+
 def create_car(session: Session, data: CarIn) -> Car:
+    """Register a car; then every ``CAR_REGISTERED`` hook runs in the same transaction."""
     _ensure_new(session, Car, data.id, "car")
     for column, value in (("wheel_code", data.wheel_code), ("ir_number", data.ir_number)):
         if value is not None and session.scalar(
@@ -89,6 +96,8 @@ def create_car(session: Session, data: CarIn) -> Car:
     car = Car(id=data.id, wheel_code=data.wheel_code, ir_number=data.ir_number, axles=data.axles)
     session.add(car)
     session.flush()
+    for hook in CAR_REGISTERED:
+        hook(session, car.id)
     return car
 
 

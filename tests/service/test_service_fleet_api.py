@@ -127,6 +127,28 @@ def test_measurement_event_for_unknown_car_warns_and_keeps_the_raw_event(
     assert client.post("/api/v1/events", json=camera, headers=keys["A-cam"]).status_code == 403
 
 
+def test_registering_a_car_derives_the_measurements_that_waited_for_it(
+    keys: dict, client: TestClient, session: Session
+) -> None:
+    """The warning promises the stored event is used once the car exists: registering the car
+    derives its waiting measurement events (in their order), not only a full replay does."""
+    for n, value in ((1, 2.6), (2, 2.7)):
+        body = event(f"D-bench-34{n}", "measurement", car="7778", values={"door_close_s": value})
+        body["occurred_at"] = f"2026-11-01T07:3{n}:00Z"
+        assert client.post("/api/v1/events", json=body, headers=keys["D-bench"]).status_code == 201
+    car = {"id": "7778", "axles": 4}
+    created = client.post("/api/v1/cars", json=car, headers=ADMIN)
+    assert created.status_code == 201, created.text
+    rows = session.scalars(
+        select(Measurement).where(Measurement.car_id == "7778").order_by(Measurement.taken_at)
+    ).all()
+    assert [measured_values(session, r)["door_close_s"] for r in rows] == [2.6, 2.7]
+    assert all(r.raw_event_id is not None and r.source == "event" for r in rows)
+    replay(session)  # live and replay agree
+    again = session.scalars(select(Measurement).where(Measurement.car_id == "7778")).all()
+    assert sorted(measured_values(session, r)["door_close_s"] for r in again) == [2.6, 2.7]
+
+
 def test_parameters_and_bands(client: TestClient, engineer: dict, dispatcher: dict) -> None:
     created = client.post("/api/v1/maintenance/parameters", json=BAND, headers=engineer)
     assert created.status_code == 201, created.text
