@@ -15,6 +15,7 @@ from identification.consist import compare_consists
 from ingest.liveness import silent_at
 from ingest.models import Snapshot
 from service.clearance.models import AxleReading, CarPassage, EotReport, Run
+from service.clearance.readers import disagreement_reason, reader_disagreements
 from service.clearance.rules import (
     ConsistEvidence,
     EotEvidence,
@@ -147,6 +148,16 @@ def compare_families(
         item = ConsistEvidence(status=comparison.status, reason=comparison.reason)
         if chosen is None or gravity[item.status] > gravity[chosen.status]:
             chosen = item
+    disagreements = reader_disagreements(families)
+    if not disagreements:
+        return chosen, shown
+    # A loss is still proven when every technology shows it; else nothing is, either way.
+    reason = disagreement_reason(disagreements)
+    if not shown or any(c["status"] != "missing" for c in shown.values()):
+        chosen = ConsistEvidence(status="unknown", reason=reason)
+    for comparison_shown in shown.values():
+        if comparison_shown["status"] == "identical":  # not "same cars" beside the other's
+            comparison_shown.update(status="unknown", reason=reason)
     return chosen, shown
 
 
