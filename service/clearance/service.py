@@ -5,8 +5,7 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import event, select
-from sqlalchemy.orm import Session, SessionTransaction
+from sqlalchemy.orm import Session
 
 from core.auth import Principal
 from core.database import utcnow
@@ -14,8 +13,9 @@ from core.errors import NotFound
 from core.models import Section
 from core.schemas import format_instant
 from service.clearance import attribution, occupancy
-from service.clearance.attribution import LOCKED, SECTION_RUNS, forget_runs, run_at, side_of
+from service.clearance.attribution import forget_runs, run_at, side_of
 from service.clearance.evidence import gather
+from service.clearance.locks import lock_section
 from service.clearance.models import AuditRecord, Run
 from service.clearance.refusals import ACTION_STATES, check_action
 from service.clearance.rules import (
@@ -30,42 +30,16 @@ from service.clearance.rules import (
 from service.clearance.sweeps import SYSTEM, record_sweep
 
 BUSY_STATES = ("occupied", "awaiting_confirmation", "review", "alarm", "blocked", "awaiting_sweep")
-__all__ = ["ACTION_STATES", "SYSTEM", "act", "attach", "close_run", "evaluate", "open_run"]
-
-
-def lock_section(session: Session, section_id: str) -> Section:
-    """The section row, locked for the transaction: one writer decides a section at a time.
-
-    Locked once per transaction: a group commit deriving many events of one section asks the
-    database once; the row in the session is current, as nobody else may change it meanwhile.
-    """
-    locked: set[str] = session.info.setdefault(LOCKED, set())
-    if section_id in locked:
-        held = session.get(Section, section_id)
-        if held is not None:
-            return held
-    section = session.scalar(select(Section).where(Section.id == section_id).with_for_update())
-    if section is None:
-        raise NotFound(f"section {section_id!r} does not exist")
-    locked.add(section_id)
-    return section
-
-
-@event.listens_for(Session, "after_soft_rollback")
-def _locks_released(session: Session, *_: object) -> None:
-    # A rollback, even to a savepoint, may release the lock (and undo what was read under it).
-    session.info.pop(LOCKED, None)
-    session.info.pop(SECTION_RUNS, None)
-
-
-@event.listens_for(Session, "after_transaction_end")
-def _transaction_ended(session: Session, transaction: SessionTransaction) -> None:
-    # The end of the transaction itself (commit or rollback) releases the locks. Not the
-    # release of a savepoint (SQLAlchemy's after_commit fires for that too), which keeps the
-    # locks and what was read under them: else every event of a broker batch, each in its
-    # savepoint, locked and read its section again.
-    if transaction.parent is None:
-        _locks_released(session)
+__all__ = [
+    "ACTION_STATES",
+    "SYSTEM",
+    "act",
+    "attach",
+    "close_run",
+    "evaluate",
+    "lock_section",
+    "open_run",
+]
 
 
 def _set_state(section: Section, state: str, at: datetime) -> None:
