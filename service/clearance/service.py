@@ -50,6 +50,14 @@ def _set_state(section: Section, state: str, at: datetime) -> None:
         section.state_since = occupancy.later(section.state_since, at)
 
 
+def not_ahead(at: datetime | None, received: datetime | None) -> datetime:
+    """A state's time from a device's time, never later than the server's now (``received``:
+    when the server got the event; a device clock ahead must not date a state in the future).
+    """
+    now = received or utcnow()
+    return now if at is None else min(at, now)
+
+
 def open_run(
     session: Session,
     run_id: int,
@@ -96,7 +104,7 @@ def open_run(
         run.status = "conflict"  # waits behind the current run
     else:
         section.current_run_id = run_id
-    _set_state(section, "alarm" if run.conflict else "occupied", at)
+    _set_state(section, "alarm" if run.conflict else "occupied", not_ahead(at, received))
     session.flush()
     out: dict[str, Any] = {"run": run_id}
     if run.conflict:
@@ -251,7 +259,7 @@ def evaluate(
     run.verdict, run.reasons, run.evidence = verdict, reasons, gathered.summary
     if first:
         run.decided_at = run.arrived_at
-    at = (run.arrived_at or run.departed_at) if first else (received or utcnow())
+    at = not_ahead((run.arrived_at or run.departed_at) if first else received, received)
     if run.sweep and run.sweep_of is not None:
         record_sweep(session, run, section)
     if section.current_run_id == run.id and run.status != "conflict":
