@@ -96,7 +96,7 @@ def open_run(
     session.add(run)
     forget_runs(session, section.id)
     busy = section.state in BUSY_STATES
-    if departure_opens_sweep(section.state):
+    if departure_opens_sweep(section.state) and occupancy.may_sweep(session, section, run):
         run.sweep, run.sweep_of = True, section.current_run_id
     else:
         run.conflict = occupancy.conflict_words(session, section, run, busy)
@@ -281,11 +281,15 @@ def evaluate(
 
 def blocking_first(decision: Decision, notes: list[str]) -> tuple[Verdict, list[str]]:
     """The verdict with the run's own doubts (``notes``), and the reasons ordered so that the
-    first one — the queue's headline — is what blocks: a loss, then a doubt, and what agrees
+    first one — the queue's headline — is what blocks: a loss, then the run's own doubts (two
+    trains in the section, a wrong clock or number), then the evidence's, and what agrees
     last (a train-number mismatch is never shown behind "axle counts agree")."""
     if decision.verdict == "complete" and notes:
         # a mismatched train number or clock, a conflict: a person's eyes are needed
         return "undetermined", [*notes, *decision.reasons]
+    if decision.verdict == "undetermined":
+        # a second train in the section, a wrong clock or number outweigh a missing photo
+        return decision.verdict, [*notes, *decision.reasons]
     return decision.verdict, [*decision.reasons, *notes]
 
 

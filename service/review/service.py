@@ -138,24 +138,39 @@ def queue_order(queue: list[dict[str, Any]]) -> list[dict[str, Any]]:
 SETTLED_WORDS = {"blocked": "kept blocked by a dispatcher", "alarm": "in alarm"}
 
 
+def _conflict_words(session: Session, section: dict[str, Any]) -> str | None:
+    """Two trains in one section, in words: the alarm itself, before any reason of the run
+    (a missing photo of the train ahead is secondary to a second train behind it)."""
+    run = section["run"]
+    if run and run["conflict"]:
+        return str(run["conflict"])
+    if not section["conflict_runs"]:
+        return None
+    waiting = session.get(Run, section["conflict_runs"][0])
+    if waiting is not None and waiting.conflict:
+        return waiting.conflict
+    return (
+        f"run {section['conflict_runs'][0]} departed into section {section['id']} before it"
+        " was cleared: two trains in one section"
+    )
+
+
 def headline(session: Session, section: dict[str, Any]) -> str:
     """The one line a dispatcher reads first for a queued section: why it needs a person.
 
-    The current run's first reason when its verdict is not ``complete`` (reasons are ordered
-    blocking first). A complete run in a section that is not free is not the reason: the
+    Two trains in one section first: the alarm that matters most. Else the current run's first
+    reason when its verdict is not ``complete`` (reasons are ordered blocking first). A complete run in a section that is not free is not the reason: the
     section is held by something else — a train waiting behind it, an earlier run's late proof
     of loss, a dispatcher's block — and that is named instead of "tail disc present".
     """
     run = section["run"]
     decision = run["decision"] if run else None
     reasons = decision["reasons"] if decision else []
+    conflict = _conflict_words(session, section)
+    if conflict:
+        return conflict
     if decision and decision["verdict"] != "complete" and reasons:
         return str(reasons[0])
-    if section["conflict_runs"]:
-        return (
-            f"run {section['conflict_runs'][0]} departed into section {section['id']} before it"
-            " was cleared"
-        )
     if section["state"] == "alarm":
         earlier = session.scalars(
             select(Run)
