@@ -8,18 +8,21 @@ from typing import Any
 from sqlalchemy.orm import Session
 
 from core.auth import Principal
-from core.database import utcnow
 from core.errors import NotFound
 from core.models import Section
-from core.schemas import format_instant
-from service.clearance import attribution, occupancy
+from service.clearance import attribution, occupancy, unseen
 from service.clearance.attribution import forget_runs, run_at, side_of
+from service.clearance.doubts import (
+    blocking_first,
+    not_ahead,
+    time_contradictions,
+    train_contradictions,
+)
 from service.clearance.evidence import gather
 from service.clearance.locks import lock_section
 from service.clearance.models import AuditRecord, Run
 from service.clearance.refusals import ACTION_STATES, check_action
 from service.clearance.rules import (
-    Decision,
     Verdict,
     decide,
     departure_opens_sweep,
@@ -48,14 +51,6 @@ def _set_state(section: Section, state: str, at: datetime) -> None:
     if section.state != state:
         section.state = state
         section.state_since = occupancy.later(section.state_since, at)
-
-
-def not_ahead(at: datetime | None, received: datetime | None) -> datetime:
-    """A state's time from a device's time, never later than the server's now (``received``:
-    when the server got the event; a device clock ahead must not date a state in the future).
-    """
-    now = received or utcnow()
-    return now if at is None else min(at, now)
 
 
 def open_run(
@@ -95,6 +90,7 @@ def open_run(
     )
     session.add(run)
     forget_runs(session, section.id)
+    _explain(session, section, run, not_ahead(at, received))
     busy = section.state in BUSY_STATES
     if departure_opens_sweep(section.state) and occupancy.may_sweep(session, section, run):
         run.sweep, run.sweep_of = True, section.current_run_id
@@ -116,6 +112,23 @@ def open_run(
     if arrival is not None:
         out["arrival"] = arrival
     return {**out, "section_state": section.state}
+
+
+def _explain(session: Session, section: Section, run: Run, at: datetime) -> None:
+    """The departure of a train whose arrival came first, when nobody had seen it enter: the
+    unseen-entry run gives the arrival back (``unseen``). Removed (nobody acted on it), it no
+    longer holds the section: the train that waited behind it, or this departure, does."""
+    found = unseen.explained_by(session, run)
+    if found is None:
+        return
+    held = section.current_run_id == found.id
+    if unseen.release(session, found) and held:
+        session.flush()
+        section.current_run_id = None
+        section.state = "free"  # only the unseen arrival had closed it; this departure decides
+        promote_conflict(session, section, at)
+    session.flush()
+    forget_runs(session, section.id)
 
 
 def _take_arrival(session: Session, run: Run, section: Section) -> dict[str, Any] | None:
@@ -178,27 +191,56 @@ def close_run(
                 "warning": f"arrival reported at {station}, but run {other.id} goes to"
                 f" {other.to_station}",
             }
-        return {
-            "run": None,
-            "warning": f"no train was running in section {section.id}; the arrival is kept"
-            " for a departure that reaches depot later",
-        }
-    arrival = _Arrival(arrival_id, at, received, train)
+        arrival = _Arrival(arrival_id, at, received, train, station)
+        return _unseen_arrival(session, section, arrival)
+    arrival = _Arrival(arrival_id, at, received, train, station)
     return _arrive(session, run, section, arrival, received)
+
+
+def _unseen_arrival(session: Session, section: Section, arrival: _Arrival) -> dict[str, Any]:
+    """An arrival that found no run: kept for a departure that reaches depot later, and until
+    then a train nobody saw enter — its own run, in review (or waiting behind the section's
+    current run), never shown as clear (``unseen``)."""
+    kept = (
+        f"no train was running in section {section.id}; the arrival is kept for a departure"
+        " that reaches depot later"
+    )
+    if arrival.id is None:
+        return {"run": None, "warning": kept}
+    train, received = arrival.body["train"], arrival.received_at
+    run = unseen.open_unseen(section, arrival.station, train, arrival.occurred_at, received,
+                             arrival.id)  # fmt: skip
+    session.add(run)
+    forget_runs(session, section.id)
+    if section.state == "free":
+        section.current_run_id = run.id
+        _set_state(section, "occupied", not_ahead(arrival.occurred_at, received))
+    else:
+        run.status = "conflict"  # waits behind the current run, like a train departed into it
+    session.flush()
+    evaluate(session, run, section, received=received)
+    return {
+        "run": None,
+        "warning": f"{kept}; until then train {train} is a train nobody saw enter the section"
+        f" (run {run.id}), for a person to look at",
+        "unseen_run": run.id,
+        "section_state": section.state,
+    }
 
 
 class _Arrival:
     """What a run keeps of its ``train_arrived`` (a raw event stored earlier has the same)."""
 
     def __init__(
-        self, ident: int | None, at: datetime, received: datetime | None, train: str
+        self,
+        ident: int | None,
+        at: datetime,
+        received: datetime | None,
+        train: str,
+        station: str = "",
     ) -> None:
-        self.id, self.occurred_at, self.received_at, self.body = (
-            ident,
-            at,
-            received,
-            {"train": train},
-        )
+        self.id, self.occurred_at, self.received_at = ident, at, received
+        self.body, self.station = {"train": train}, station
 
 
 def _other_end(section: Section, station: str) -> str:
@@ -214,28 +256,6 @@ def _arrive(
     if run.status == "running":
         run.status = "arrived"  # a waiting run keeps "conflict" until it is the current run
     return evaluate(session, run, section, received=received)
-
-
-def train_contradictions(run: Run) -> list[str]:
-    """The arrival reported another train number than the departure: which train is in the
-    section is in doubt, so the run is never ``complete`` without a person. Derived from the
-    run (the arrival's number is stored) so that every re-decision — late evidence, replay —
-    keeps it, as the dispatcher must keep seeing it."""
-    if run.arrival_train is None or run.arrival_train == run.train:
-        return []
-    return [f"arrival reported train {run.arrival_train}, departure train {run.train}"]
-
-
-def time_contradictions(run: Run) -> list[str]:
-    """An arrival dated before its own departure: one of the two clocks is wrong, so no time
-    window of the run can be trusted. Kept (201, stored, never dropped) but never ``complete``:
-    derived from the run so that every re-decision keeps it."""
-    if run.arrived_at is None or run.arrived_at >= run.departed_at:
-        return []
-    return [
-        f"the arrival is dated {format_instant(run.arrived_at)}, before the departure at"
-        f" {format_instant(run.departed_at)}: a device clock is wrong; a person must look"
-    ]
 
 
 def evaluate(
@@ -277,20 +297,6 @@ def evaluate(
         _set_state(section, next_state(section.state, verdict, section.mode), at)
     session.flush()
     return {"run": run.id, "verdict": verdict, "reasons": reasons, "section_state": section.state}
-
-
-def blocking_first(decision: Decision, notes: list[str]) -> tuple[Verdict, list[str]]:
-    """The verdict with the run's own doubts (``notes``), and the reasons ordered so that the
-    first one — the queue's headline — is what blocks: a loss, then the run's own doubts (two
-    trains in the section, a wrong clock or number), then the evidence's, and what agrees
-    last (a train-number mismatch is never shown behind "axle counts agree")."""
-    if decision.verdict == "complete" and notes:
-        # a mismatched train number or clock, a conflict: a person's eyes are needed
-        return "undetermined", [*notes, *decision.reasons]
-    if decision.verdict == "undetermined":
-        # a second train in the section, a wrong clock or number outweigh a missing photo
-        return decision.verdict, [*notes, *decision.reasons]
-    return decision.verdict, [*decision.reasons, *notes]
 
 
 def promote_conflict(session: Session, section: Section, at: datetime) -> None:
@@ -359,13 +365,15 @@ def act(
     if run is None:
         raise NotFound(f"run {run_id} does not exist")
     section = lock_section(session, run.section)
-    check_action(session, run, section, action)
+    missing = check_action(session, run, section, action, at)
     before = section.state
     gathered = gather(session, run, section)
     _set_state(section, ACTION_STATES[action], at)
     run.auto = False
-    if run.arrived_at is None:
-        run.status = "overtaken"  # released without an arrival: it holds the section no more
+    if run.arrived_at is None and not (missing and action == "keep_blocked"):
+        # Released without an arrival: it holds the section no more. A silent section's
+        # train kept blocked still does: its arrival, if it ever comes, closes its run.
+        run.status = "overtaken"
         forget_runs(session, section.id)
     if action == "clear":
         promote_conflict(session, section, at)
@@ -390,6 +398,7 @@ def act(
                     if action == "clear" and before == "awaiting_sweep"
                     else {}
                 ),
+                **({"arrival_missing": missing} if missing else {}),
             },
         )
         session.add(record)
