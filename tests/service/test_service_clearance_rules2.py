@@ -59,6 +59,7 @@ def test_an_arrival_nobody_saw_enter_puts_the_section_in_review(
     assert answer["run"] is None and "kept" in answer["warning"], answer  # for a late departure
     section = line.section()
     assert section["state"] == "review", section
+    assert section["run"]["departure_seen"] is False, section
     doubt = section["run"]["decision"]["reasons"][0]
     assert "2041" in doubt and "AB" in doubt and "nobody saw it enter" in doubt, doubt
     login(client, session, "ivan")
