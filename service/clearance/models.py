@@ -44,7 +44,7 @@ class Run(Base):
     departure_received_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
     arrival_received_at: Mapped[datetime | None] = mapped_column(UTCDateTime(), nullable=True)
     # The train number the arrival reported (``train_arrived.train``): another number than
-    # the departure's is evidence every re-decision keeps (service.train_contradictions).
+    # the departure's is evidence every re-decision keeps (doubts.train_contradictions).
     arrival_train: Mapped[str | None] = mapped_column(String(32), nullable=True)
     # Departed into a section that was not cleared: why, in words (kept for every re-decision,
     # which must ask a person). ``status`` is "conflict" while the run waits behind the

@@ -18,6 +18,7 @@ from sqlalchemy import and_, or_, select
 from sqlalchemy.orm import Session
 
 from core.models import Device, Section
+from core.schemas import format_instant
 from ingest.models import RawEvent
 from service.clearance.attribution import IN_SECTION
 from service.clearance.models import Run
@@ -37,6 +38,13 @@ def conflict_words(session: Session, section: Section, run: Run, busy: bool) -> 
     train held the section by device time is a conflict too (it reached depot late, after the
     section had been freed)."""
     holder = session.get(Run, section.current_run_id) if section.current_run_id else None
+    if busy and section.state == "awaiting_sweep" and holder is not None:
+        return (
+            f"train {run.train} departed into section {section.id} at"
+            f" {format_instant(run.departed_at)}, before train {holder.train} (run {holder.id})"
+            " had left it: it cannot be the sweep train asked for; two trains in one section,"
+            " a person must look"
+        )
     if busy:
         held = f" (run {holder.id}, train {holder.train})" if holder else ""
         return (
@@ -44,12 +52,44 @@ def conflict_words(session: Session, section: Section, run: Run, busy: bool) -> 
             f" and was not cleared{held}: a person must look"
         )
     other = holder_at(session, section, run)
-    if other is None:
+    if other is not None:
+        return (
+            f"train {run.train} departed into section {section.id} while train {other.train}"
+            f" (run {other.id}) was in it, so the section was not cleared: a person must look"
+        )
+    behind = follower_at(session, run)
+    if behind is None:
         return None
     return (
-        f"train {run.train} departed into section {section.id} while train {other.train}"
-        f" (run {other.id}) was in it, so the section was not cleared: a person must look"
+        f"train {run.train} departed into section {section.id} at"
+        f" {format_instant(run.departed_at)}, and train {behind.train} (run {behind.id})"
+        f" departed into it at {format_instant(behind.departed_at)} before train {run.train} was"
+        " seen to arrive: two trains in one section; a person must look"
     )
+
+
+def follower_at(session: Session, run: Run) -> Run | None:
+    """A run that departed into the section after ``run`` (a departure that reached depot
+    late) while ``run`` may still have been in it: before its arrival, if one came first
+    (``early_arrival``), else at any time — an arrival not seen proves nothing."""
+    early = early_arrival(session, run, before=run.id)
+    query = select(Run).where(Run.section == run.section, Run.id != run.id)
+    query = query.where(Run.departed_at > run.departed_at)
+    if early is not None:
+        query = query.where(Run.departed_at < early.occurred_at)
+    return session.scalar(query.order_by(Run.departed_at, Run.id).limit(1))
+
+
+def may_sweep(session: Session, section: Section, run: Run) -> bool:
+    """Whether ``run``, departing into a section awaiting its sweep, is the sweep train: it
+    must have departed after the state that asks for the sweep began — after the swept train
+    left the section (its arrival; its departure if it never arrived) — and while no other
+    train was in it. A late departure dated while the swept train was inside is a conflict."""
+    swept = session.get(Run, section.current_run_id) if section.current_run_id else None
+    if swept is None:
+        return holder_at(session, section, run) is None
+    began = swept.arrived_at or swept.departed_at
+    return run.departed_at >= began and holder_at(session, section, run) is None
 
 
 def holder_at(session: Session, section: Section, run: Run) -> Run | None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from datetime import datetime
+
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -10,14 +12,21 @@ from core.models import Section
 from core.schemas import format_instant
 from service.clearance import occupancy
 from service.clearance.models import AuditRecord, Run
+from service.clearance.overdue import overdue, waiting_words
 from service.clearance.rules import SWEEP_FROM
 
 ACTION_STATES = {"clear": "free", "keep_blocked": "blocked", "sweep": "awaiting_sweep"}
 ACTION_WORDS = {"clear": "cleared", "keep_blocked": "kept blocked", "sweep": "sent to a sweep"}
 
 
-def check_action(session: Session, run: Run, section: Section, action: str) -> None:
-    """Refuse (409) an action that cannot apply to the run now, naming why."""
+def check_action(
+    session: Session, run: Run, section: Section, action: str, at: datetime
+) -> str | None:
+    """Refuse (409) an action that cannot apply to the run now, naming why.
+
+    Returns, for a run that has not arrived and whose section has been silent long enough
+    (``overdue``), why a person may act on it anyway (kept in the audit), else None.
+    """
     if run.status == "conflict":
         raise Conflict(
             f"run {run.id} (train {run.train}) departed into section {section.id} before it"
@@ -26,20 +35,31 @@ def check_action(session: Session, run: Run, section: Section, action: str) -> N
         )
     if section.current_run_id != run.id:
         raise Conflict(f"run {run.id} is not the current run of section {section.id}")
+    missing = None
     if run.arrived_at is None and not occupancy.overtaken(session, run):
-        raise Conflict(
-            f"run {run.id} has not arrived yet; the train is still in section {section.id}"
-        )
+        missing = overdue(session, run, at)
+        if missing is None:
+            raise Conflict(
+                f"run {run.id} has not arrived yet; the train is still in section {section.id}"
+                f" ({waiting_words()})"
+            )
+        if action == "clear" and section.state == "occupied":
+            raise Conflict(
+                f"run {run.id} has not arrived ({missing}): keep it blocked first, with a"
+                " reason; a clear is a second, separate decision"
+            )
     if section.state == ACTION_STATES[action]:
         raise Conflict(
             f"run {run.id} is already {ACTION_WORDS[action]}{_decided_by(session, run, action)}:"
             f" section {section.id} is {section.state}; nothing was recorded"
         )
-    if action == "sweep" and section.state not in SWEEP_FROM:
+    silent_train = missing is not None and section.state == "occupied"
+    if action == "sweep" and section.state not in SWEEP_FROM and not silent_train:
         raise Conflict(
             f"section {section.id} is {section.state}: a sweep is asked for a section in alarm,"
             " review or blocked"
         )
+    return missing
 
 
 def _decided_by(session: Session, run: Run, action: str) -> str:

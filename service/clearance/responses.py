@@ -51,13 +51,21 @@ class RunOut(Answer):
     train: str
     status: str = Field(
         description="running, arrived, conflict (departed into a section that was not cleared"
-        " and waits behind its current run, arrived or not: see arrived_at), or overtaken"
-        " (its arrival never came, a train behind it arrived, and a dispatcher acted on it)"
+        " and waits behind its current run, arrived or not: see arrived_at), overtaken"
+        " (its arrival never came, a train behind it arrived or its section fell silent, and a"
+        " dispatcher released it), or explained (the run of an arrival nobody saw enter, acted"
+        " on by a person, whose departure came later and took the arrival)"
     )
     conflict: str | None = Field(
         default=None,
         description="why the run departed into a section that was not cleared (a person must"
         " look at such a run; it is never decided complete by itself)",
+    )
+    departure_seen: bool = Field(
+        default=True,
+        description="false for the run of an arrival out of a section nobody saw a train enter"
+        " (no departure reached depot): its departed_at is the arrival's time standing in, and"
+        " a person must look at it",
     )
     from_station: str
     to_station: str

@@ -155,6 +155,10 @@ def _losses(evidence: RunEvidence) -> list[str]:
     return found
 
 
+def _present(tail: TailEvidence | None) -> bool:
+    return tail is not None and tail.verdict == "present"
+
+
 def _doubts(evidence: RunEvidence) -> list[str]:
     """What keeps rule 2 from proving completeness (each is a reason for a person to look)."""
     doubts: list[str] = []
@@ -175,6 +179,14 @@ def _doubts(evidence: RunEvidence) -> list[str]:
         doubts.append(
             f"no tail disc found, but with low confidence"
             f" ({arrival.score:.2f} ≤ {arrival.absent_confidence:.2f})"
+        )
+    departure = evidence.departure_tail
+    if departure is not None and departure.verdict == "absent" and _present(arrival):
+        # Rule 2: no item may contradict the arrival disc. A train that left without its disc
+        # cannot arrive with one: one of the two images is of another train, or is wrong.
+        doubts.append(
+            f"the departure image shows no tail disc (score {departure.score:.2f}) but the"
+            " arrival image shows one: the images contradict each other; a person must look"
         )
     if evidence.consist is not None and evidence.consist.status == "unknown":
         doubts.append(evidence.consist.reason)

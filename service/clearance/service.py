@@ -5,21 +5,24 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import event, select
-from sqlalchemy.orm import Session, SessionTransaction
+from sqlalchemy.orm import Session
 
 from core.auth import Principal
-from core.database import utcnow
 from core.errors import NotFound
 from core.models import Section
-from core.schemas import format_instant
-from service.clearance import attribution, occupancy
-from service.clearance.attribution import LOCKED, SECTION_RUNS, forget_runs, run_at, side_of
+from service.clearance import attribution, occupancy, unseen
+from service.clearance.attribution import forget_runs, run_at, side_of
+from service.clearance.doubts import (
+    blocking_first,
+    not_ahead,
+    time_contradictions,
+    train_contradictions,
+)
 from service.clearance.evidence import gather
+from service.clearance.locks import lock_section
 from service.clearance.models import AuditRecord, Run
 from service.clearance.refusals import ACTION_STATES, check_action
 from service.clearance.rules import (
-    Decision,
     Verdict,
     decide,
     departure_opens_sweep,
@@ -30,42 +33,16 @@ from service.clearance.rules import (
 from service.clearance.sweeps import SYSTEM, record_sweep
 
 BUSY_STATES = ("occupied", "awaiting_confirmation", "review", "alarm", "blocked", "awaiting_sweep")
-__all__ = ["ACTION_STATES", "SYSTEM", "act", "attach", "close_run", "evaluate", "open_run"]
-
-
-def lock_section(session: Session, section_id: str) -> Section:
-    """The section row, locked for the transaction: one writer decides a section at a time.
-
-    Locked once per transaction: a group commit deriving many events of one section asks the
-    database once; the row in the session is current, as nobody else may change it meanwhile.
-    """
-    locked: set[str] = session.info.setdefault(LOCKED, set())
-    if section_id in locked:
-        held = session.get(Section, section_id)
-        if held is not None:
-            return held
-    section = session.scalar(select(Section).where(Section.id == section_id).with_for_update())
-    if section is None:
-        raise NotFound(f"section {section_id!r} does not exist")
-    locked.add(section_id)
-    return section
-
-
-@event.listens_for(Session, "after_soft_rollback")
-def _locks_released(session: Session, *_: object) -> None:
-    # A rollback, even to a savepoint, may release the lock (and undo what was read under it).
-    session.info.pop(LOCKED, None)
-    session.info.pop(SECTION_RUNS, None)
-
-
-@event.listens_for(Session, "after_transaction_end")
-def _transaction_ended(session: Session, transaction: SessionTransaction) -> None:
-    # The end of the transaction itself (commit or rollback) releases the locks. Not the
-    # release of a savepoint (SQLAlchemy's after_commit fires for that too), which keeps the
-    # locks and what was read under them: else every event of a broker batch, each in its
-    # savepoint, locked and read its section again.
-    if transaction.parent is None:
-        _locks_released(session)
+__all__ = [
+    "ACTION_STATES",
+    "SYSTEM",
+    "act",
+    "attach",
+    "close_run",
+    "evaluate",
+    "lock_section",
+    "open_run",
+]
 
 
 def _set_state(section: Section, state: str, at: datetime) -> None:
@@ -113,8 +90,9 @@ def open_run(
     )
     session.add(run)
     forget_runs(session, section.id)
+    _explain(session, section, run, not_ahead(at, received))
     busy = section.state in BUSY_STATES
-    if departure_opens_sweep(section.state):
+    if departure_opens_sweep(section.state) and occupancy.may_sweep(session, section, run):
         run.sweep, run.sweep_of = True, section.current_run_id
     else:
         run.conflict = occupancy.conflict_words(session, section, run, busy)
@@ -122,7 +100,7 @@ def open_run(
         run.status = "conflict"  # waits behind the current run
     else:
         section.current_run_id = run_id
-    _set_state(section, "alarm" if run.conflict else "occupied", at)
+    _set_state(section, "alarm" if run.conflict else "occupied", not_ahead(at, received))
     session.flush()
     out: dict[str, Any] = {"run": run_id}
     if run.conflict:
@@ -134,6 +112,23 @@ def open_run(
     if arrival is not None:
         out["arrival"] = arrival
     return {**out, "section_state": section.state}
+
+
+def _explain(session: Session, section: Section, run: Run, at: datetime) -> None:
+    """The departure of a train whose arrival came first, when nobody had seen it enter: the
+    unseen-entry run gives the arrival back (``unseen``). Removed (nobody acted on it), it no
+    longer holds the section: the train that waited behind it, or this departure, does."""
+    found = unseen.explained_by(session, run)
+    if found is None:
+        return
+    held = section.current_run_id == found.id
+    if unseen.release(session, found) and held:
+        session.flush()
+        section.current_run_id = None
+        section.state = "free"  # only the unseen arrival had closed it; this departure decides
+        promote_conflict(session, section, at)
+    session.flush()
+    forget_runs(session, section.id)
 
 
 def _take_arrival(session: Session, run: Run, section: Section) -> dict[str, Any] | None:
@@ -196,27 +191,56 @@ def close_run(
                 "warning": f"arrival reported at {station}, but run {other.id} goes to"
                 f" {other.to_station}",
             }
-        return {
-            "run": None,
-            "warning": f"no train was running in section {section.id}; the arrival is kept"
-            " for a departure that reaches depot later",
-        }
-    arrival = _Arrival(arrival_id, at, received, train)
+        arrival = _Arrival(arrival_id, at, received, train, station)
+        return _unseen_arrival(session, section, arrival)
+    arrival = _Arrival(arrival_id, at, received, train, station)
     return _arrive(session, run, section, arrival, received)
+
+
+def _unseen_arrival(session: Session, section: Section, arrival: _Arrival) -> dict[str, Any]:
+    """An arrival that found no run: kept for a departure that reaches depot later, and until
+    then a train nobody saw enter — its own run, in review (or waiting behind the section's
+    current run), never shown as clear (``unseen``)."""
+    kept = (
+        f"no train was running in section {section.id}; the arrival is kept for a departure"
+        " that reaches depot later"
+    )
+    if arrival.id is None:
+        return {"run": None, "warning": kept}
+    train, received = arrival.body["train"], arrival.received_at
+    run = unseen.open_unseen(section, arrival.station, train, arrival.occurred_at, received,
+                             arrival.id)  # fmt: skip
+    session.add(run)
+    forget_runs(session, section.id)
+    if section.state == "free":
+        section.current_run_id = run.id
+        _set_state(section, "occupied", not_ahead(arrival.occurred_at, received))
+    else:
+        run.status = "conflict"  # waits behind the current run, like a train departed into it
+    session.flush()
+    evaluate(session, run, section, received=received)
+    return {
+        "run": None,
+        "warning": f"{kept}; until then train {train} is a train nobody saw enter the section"
+        f" (run {run.id}), for a person to look at",
+        "unseen_run": run.id,
+        "section_state": section.state,
+    }
 
 
 class _Arrival:
     """What a run keeps of its ``train_arrived`` (a raw event stored earlier has the same)."""
 
     def __init__(
-        self, ident: int | None, at: datetime, received: datetime | None, train: str
+        self,
+        ident: int | None,
+        at: datetime,
+        received: datetime | None,
+        train: str,
+        station: str = "",
     ) -> None:
-        self.id, self.occurred_at, self.received_at, self.body = (
-            ident,
-            at,
-            received,
-            {"train": train},
-        )
+        self.id, self.occurred_at, self.received_at = ident, at, received
+        self.body, self.station = {"train": train}, station
 
 
 def _other_end(section: Section, station: str) -> str:
@@ -232,28 +256,6 @@ def _arrive(
     if run.status == "running":
         run.status = "arrived"  # a waiting run keeps "conflict" until it is the current run
     return evaluate(session, run, section, received=received)
-
-
-def train_contradictions(run: Run) -> list[str]:
-    """The arrival reported another train number than the departure: which train is in the
-    section is in doubt, so the run is never ``complete`` without a person. Derived from the
-    run (the arrival's number is stored) so that every re-decision — late evidence, replay —
-    keeps it, as the dispatcher must keep seeing it."""
-    if run.arrival_train is None or run.arrival_train == run.train:
-        return []
-    return [f"arrival reported train {run.arrival_train}, departure train {run.train}"]
-
-
-def time_contradictions(run: Run) -> list[str]:
-    """An arrival dated before its own departure: one of the two clocks is wrong, so no time
-    window of the run can be trusted. Kept (201, stored, never dropped) but never ``complete``:
-    derived from the run so that every re-decision keeps it."""
-    if run.arrived_at is None or run.arrived_at >= run.departed_at:
-        return []
-    return [
-        f"the arrival is dated {format_instant(run.arrived_at)}, before the departure at"
-        f" {format_instant(run.departed_at)}: a device clock is wrong; a person must look"
-    ]
 
 
 def evaluate(
@@ -277,7 +279,7 @@ def evaluate(
     run.verdict, run.reasons, run.evidence = verdict, reasons, gathered.summary
     if first:
         run.decided_at = run.arrived_at
-    at = (run.arrived_at or run.departed_at) if first else (received or utcnow())
+    at = not_ahead((run.arrived_at or run.departed_at) if first else received, received)
     if run.sweep and run.sweep_of is not None:
         record_sweep(session, run, section)
     if section.current_run_id == run.id and run.status != "conflict":
@@ -295,16 +297,6 @@ def evaluate(
         _set_state(section, next_state(section.state, verdict, section.mode), at)
     session.flush()
     return {"run": run.id, "verdict": verdict, "reasons": reasons, "section_state": section.state}
-
-
-def blocking_first(decision: Decision, notes: list[str]) -> tuple[Verdict, list[str]]:
-    """The verdict with the run's own doubts (``notes``), and the reasons ordered so that the
-    first one — the queue's headline — is what blocks: a loss, then a doubt, and what agrees
-    last (a train-number mismatch is never shown behind "axle counts agree")."""
-    if decision.verdict == "complete" and notes:
-        # a mismatched train number or clock, a conflict: a person's eyes are needed
-        return "undetermined", [*notes, *decision.reasons]
-    return decision.verdict, [*decision.reasons, *notes]
 
 
 def promote_conflict(session: Session, section: Section, at: datetime) -> None:
@@ -373,13 +365,15 @@ def act(
     if run is None:
         raise NotFound(f"run {run_id} does not exist")
     section = lock_section(session, run.section)
-    check_action(session, run, section, action)
+    missing = check_action(session, run, section, action, at)
     before = section.state
     gathered = gather(session, run, section)
     _set_state(section, ACTION_STATES[action], at)
     run.auto = False
-    if run.arrived_at is None:
-        run.status = "overtaken"  # released without an arrival: it holds the section no more
+    if run.arrived_at is None and not (missing and action == "keep_blocked"):
+        # Released without an arrival: it holds the section no more. A silent section's
+        # train kept blocked still does: its arrival, if it ever comes, closes its run.
+        run.status = "overtaken"
         forget_runs(session, section.id)
     if action == "clear":
         promote_conflict(session, section, at)
@@ -404,6 +398,7 @@ def act(
                     if action == "clear" and before == "awaiting_sweep"
                     else {}
                 ),
+                **({"arrival_missing": missing} if missing else {}),
             },
         )
         session.add(record)

@@ -10,6 +10,7 @@ from sqlalchemy.orm import Session
 
 from core.models import Section
 from core.schemas import format_optional_instant
+from service.clearance import unseen
 from service.clearance.models import AuditRecord, Run
 
 QUEUE_STATES = ("alarm", "review", "awaiting_confirmation", "blocked")
@@ -46,6 +47,8 @@ def run_out(session: Session, run: Run) -> dict[str, Any]:
         "train": run.train,
         "status": run.status,
         "conflict": run.conflict,
+        # False for the run of an arrival nobody saw enter the section (``unseen``)
+        "departure_seen": not unseen.is_unseen(run),
         "from_station": run.from_station,
         "to_station": run.to_station,
         "departed_at": _iso(run.departed_at),

@@ -13,7 +13,7 @@ from sqlalchemy.orm import Session
 from core.models import Section
 from core.timefmt import elapsed
 from ingest import liveness
-from service.clearance import occupancy
+from service.clearance import occupancy, overdue
 from service.clearance.models import Run
 from service.clearance.rules import SWEEP_FROM
 from service.clearance.service import ACTION_STATES
@@ -97,13 +97,18 @@ def sensible_actions(
     """The actions that would change something, safest first on an alarm.
 
     Only on the section's current run, arrived (or ``overtaken``: its arrival never came but
-    the train behind it arrived); never the action whose state the section is already in;
+    the train behind it arrived, or its section has been silent long enough: ``overdue``,
+    where a still ``occupied`` section is first kept blocked or swept, never cleared); never
+    the action whose state the section is already in;
     nothing on a free section; a sweep only where nothing proves the section empty.
     """
     if section is None or run is None or (run["status"] != "arrived" and not overtaken):
         return []
-    if section["last_run_id"] != run["id"] or section["state"] in ("free", "occupied"):
+    if section["last_run_id"] != run["id"] or section["state"] == "free":
         return []
+    if section["state"] == "occupied":
+        # a train that never arrived in a silent section (``overdue``): block or sweep first
+        return ["keep_blocked", "sweep"] if overtaken else []
     order = ["keep_blocked", "clear"] if section["state"] == "alarm" else ["clear", "keep_blocked"]
     order.append("sweep")
     state = section["state"]
@@ -138,24 +143,42 @@ def queue_order(queue: list[dict[str, Any]]) -> list[dict[str, Any]]:
 SETTLED_WORDS = {"blocked": "kept blocked by a dispatcher", "alarm": "in alarm"}
 
 
+def _conflict_words(session: Session, section: dict[str, Any]) -> str | None:
+    """Two trains in one section, in words: the alarm itself, before any reason of the run
+    (a missing photo of the train ahead is secondary to a second train behind it)."""
+    run = section["run"]
+    if run and run["conflict"]:
+        return str(run["conflict"])
+    if not section["conflict_runs"]:
+        return None
+    waiting = session.get(Run, section["conflict_runs"][0])
+    if waiting is not None and waiting.conflict:
+        return waiting.conflict
+    return (
+        f"run {section['conflict_runs'][0]} departed into section {section['id']} before it"
+        " was cleared: two trains in one section"
+    )
+
+
 def headline(session: Session, section: dict[str, Any]) -> str:
     """The one line a dispatcher reads first for a queued section: why it needs a person.
 
-    The current run's first reason when its verdict is not ``complete`` (reasons are ordered
-    blocking first). A complete run in a section that is not free is not the reason: the
+    Two trains in one section first: the alarm that matters most. Else the current run's first
+    reason when its verdict is not ``complete`` (reasons are ordered blocking first). A
+    complete run in a section that is not free is not the reason: the
     section is held by something else — a train waiting behind it, an earlier run's late proof
     of loss, a dispatcher's block — and that is named instead of "tail disc present".
     """
     run = section["run"]
     decision = run["decision"] if run else None
     reasons = decision["reasons"] if decision else []
+    conflict = _conflict_words(session, section)
+    if conflict:
+        return conflict
+    if section.get("overdue"):
+        return str(section["overdue"])
     if decision and decision["verdict"] != "complete" and reasons:
         return str(reasons[0])
-    if section["conflict_runs"]:
-        return (
-            f"run {section['conflict_runs'][0]} departed into section {section['id']} before it"
-            " was cleared"
-        )
     if section["state"] == "alarm":
         earlier = session.scalars(
             select(Run)
@@ -168,6 +191,19 @@ def headline(session: Session, section: dict[str, Any]) -> str:
     if section["state"] in SETTLED_WORDS and decision and decision["verdict"] == "complete":
         return f"section {SETTLED_WORDS[section['state']]}; this run arrived complete"
     return str(reasons[0]) if reasons else ""
+
+
+def _overdue(session: Session, section: dict[str, Any], now: datetime) -> str | None:
+    """Why a section's train that never arrived is for a person now (``overdue``), or None."""
+    run = section["run"]
+    if run is None or run["arrived_at"] is not None or section["state"] == "free":
+        return None
+    found = session.get(Run, run["id"])
+    return None if found is None else overdue.overdue(session, found, now)
+
+
+def _may_act_unarrived(session: Session, run: Run, now: datetime) -> bool:
+    return occupancy.overtaken(session, run) or overdue.overdue(session, run, now) is not None
 
 
 def _title(queue: list[dict[str, Any]]) -> str:
@@ -183,8 +219,14 @@ def build_screen(
     sections = [
         section_out(session, s) for s in session.scalars(select(Section).order_by(Section.id))
     ]
+    for s in sections:
+        s["overdue"] = _overdue(session, s, now)
     queue = queue_order(
-        [s for s in sections if s["state"] in QUEUE_STATES and s["run"] is not None]
+        [
+            s
+            for s in sections
+            if (s["state"] in QUEUE_STATES or s["overdue"]) and s["run"] is not None
+        ]
     )
     for s in queue:
         s["since_words"] = _since(s, now)
@@ -197,7 +239,7 @@ def build_screen(
     run = run_out(session, found) if found else None
     held = next((s for s in sections if run and s["id"] == run["section"]), None)
     released = found is not None and found.arrived_at is None
-    released = released and found is not None and occupancy.overtaken(session, found)
+    released = released and found is not None and _may_act_unarrived(session, found, now)
     actions = sensible_actions(held, run, overtaken=released) if role in DECIDERS else []
     confirm = {}
     if held and held["state"] in CONFIRM_CLEAR:

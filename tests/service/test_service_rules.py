@@ -254,6 +254,8 @@ def test_every_combination_is_safe(departure_tail: TailEvidence | None) -> None:
             and consist in (None, IDENTICAL)
             and not stale
             and (dep is None or arr is None or dep == arr)
+            # rule 2: a departure image without the disc contradicts the arrival's disc
+            and departure_tail not in (ABSENT_SURE, ABSENT_WEAK)
         )
         expected = "incomplete" if proves_loss else "complete" if agrees else "undetermined"
         assert verdict == expected, evidence
@@ -306,6 +308,7 @@ def test_every_combination_with_eot_is_safe(eot_evidence: EotEvidence | None) ->
             and not stale
             and (dep is None or arr is None or dep == arr)
             and (last is None or last >= 45)
+            and not (arrival is PRESENT and departure in (ABSENT_SURE, ABSENT_WEAK))
         )
         expected = "incomplete" if proves_loss else "complete" if agrees else "undetermined"
         assert verdict == expected, evidence
