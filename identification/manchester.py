@@ -31,6 +31,7 @@ from identification.biphase import (
     check_convention,
     recover_bits,
 )
+from identification.rules import RULES, IdentificationRules
 
 __all__ = [
     "FRAME_BITS",
@@ -151,12 +152,13 @@ def _fill_one_erasure(payload: npt.NDArray[np.int8]) -> int | None:
     return found[0] if len(found) == 1 else None
 
 
-def _combined_frame(bits: npt.NDArray[np.int8]) -> int | None:
+def _combined_frame(bits: npt.NDArray[np.int8], need: int) -> int | None:
     """Bit-wise vote across the repetitions of the frame.
 
     Every sync window that agrees with all the bits it holds (erasures allowed, at least 16
     bits known) starts a repetition; each of the 48 frame positions is the majority of the
-    repetitions' non-erased bits; the voted frame must pass the CRC (one erased bit may be
+    repetitions' non-erased bits, read in at least ``need`` of them (a bit seen once is one
+    read, as a frame seen once is); the voted frame must pass the CRC (one erased bit may be
     filled by it).
     """
     if bits.size < 24:
@@ -174,7 +176,9 @@ def _combined_frame(bits: npt.NDArray[np.int8]) -> int | None:
     stack = np.stack([padded[p : p + FRAME_BITS] for p in starts])
     ones = np.count_nonzero(stack == 1, axis=0)
     zeros = np.count_nonzero(stack == 0, axis=0)
-    voted = np.where(ones > zeros, 1, np.where(zeros > ones, 0, -1)).astype(np.int8)
+    one = (ones > zeros) & (ones >= need)
+    zero = (zeros > ones) & (zeros >= need)
+    voted = np.where(one, 1, np.where(zero, 0, -1)).astype(np.int8)
     return _fill_one_erasure(voted[24:])
 
 
@@ -183,6 +187,7 @@ def decode_passage(
     *,
     samples_per_bit: float,
     convention: Convention = "ieee",
+    rules: IdentificationRules = RULES,
 ) -> ManchesterDecode:
     """Decode one ``ir_manchester`` passage.
 
@@ -193,24 +198,35 @@ def decode_passage(
     samples_per_bit : float
         Nominal samples per bit (>= 2); the true rate may differ by several per cent.
     convention : {"ieee", "thomas"}
+    rules : IdentificationRules
+        ``min_agreeing_reads``: CRC-valid frames that must agree (or, with fewer, how many
+        repetitions must agree on each bit of the voted frame).
 
     Returns
     -------
     ManchesterDecode
-        The car number (strict majority of the CRC-valid frames, or the bit-wise vote across
-        frames when no single frame is valid) or None with the reason.
+        The car number (strict majority of the CRC-valid frames, read at least
+        ``rules.min_agreeing_reads`` times, or else the bit-wise vote across frames) or None
+        with the reason.
     """
     rec = recover_bits(samples, samples_per_bit=samples_per_bit, convention=convention)
     numbers, bad = _single_frames(bits_to_text(rec.bits))
     spb = 2.0 * rec.half_bit if rec.bits.size else None
-    if numbers:
-        best, count = Counter(numbers).most_common(1)[0]
-        if 2 * count <= len(numbers):
-            reason = "frames disagree: no strict majority"
-            return ManchesterDecode(None, len(numbers), bad, reason, numbers, False, spb)
+    need = rules.min_agreeing_reads
+    best, count = Counter(numbers).most_common(1)[0] if numbers else (None, 0)
+    if numbers and 2 * count <= len(numbers):
+        reason = "frames disagree: no strict majority"
+        return ManchesterDecode(None, len(numbers), bad, reason, numbers, False, spb)
+    if count >= need:
         return ManchesterDecode(best, len(numbers), bad, "ok", numbers, False, spb)
-    voted = _combined_frame(rec.bits)
-    if voted is not None:
-        return ManchesterDecode(voted, 0, bad, "ok (bit-wise vote across frames)", [], True, spb)
-    reason = "no valid frame" if bad else "no frame found"
-    return ManchesterDecode(None, 0, bad, reason, [], False, spb)
+    # Fewer valid frames than reads needed: the repetitions together, bit by bit, may still
+    # show the number read often enough (a bad frame's other bits agree with the good one).
+    voted = _combined_frame(rec.bits, need)
+    if voted is not None and best in (None, voted):
+        reason = "ok (bit-wise vote across frames)"
+        return ManchesterDecode(voted, len(numbers), bad, reason, numbers, True, spb)
+    if numbers:
+        reason = f"only {count} valid frame(s) of {best}; {need} agreeing reads needed"
+    else:
+        reason = "no valid frame" if bad else "no frame found"
+    return ManchesterDecode(None, len(numbers), bad, reason, numbers, False, spb)

@@ -118,17 +118,33 @@ def _accuracy(n: int, seed: int, **kw: float) -> tuple[int, int, int]:
 def test_accuracy_clock_error_and_flipped_samples() -> None:
     # ±5 % clock error, 1 % flipped samples, 8 samples per bit, 4 frame durations per passage
     right, wrong, _ = _accuracy(1500, seed=41, flip_prob=0.01)
-    assert right / 1500 >= 0.995  # measured: 1497 / 1500, 3 None
+    # measured: 1492 / 1500, 8 None (1497 before a single valid frame stopped being enough)
+    assert right / 1500 >= 0.99
     assert wrong == 0
 
 
 def test_heavy_flips_never_give_a_wrong_number() -> None:
     right, wrong, none = _accuracy(600, seed=42, flip_prob=0.05)
     assert wrong == 0
-    assert none > 0 and right > 450  # measured: 508 right, 92 None
+    # measured: 354 right, 246 None (508 before a car needed 2 agreeing reads: the frames a
+    # single CRC-8 check passed are too weak alone against the 1e-5 undetected-error bound)
+    assert none > 0 and right > 300
 
 
 @pytest.mark.parametrize("spb", [16, 64])
 def test_accuracy_other_rates(spb: int) -> None:
     right, wrong, _ = _accuracy(200, seed=43 + spb, flip_prob=0.01, samples_per_bit=spb)
     assert right == 200 and wrong == 0
+
+
+def test_one_frame_is_not_enough_as_one_read_is_not() -> None:
+    """README and identification.md: a car number needs 2 agreeing reads; a single CRC-valid
+    frame is one read (CRC-8 alone is too weak against the 1e-5 undetected-error bound), and
+    so is a frame and a half (the passage cut short). An independent trial got car 117 from
+    each."""
+    one = decode_passage(_clean(117, repeats=1), samples_per_bit=8)
+    assert one.car_number is None and "2" in one.reason, one
+    half = _clean(117, repeats=2)
+    cut = decode_passage(half[: len(half) * 3 // 4], samples_per_bit=8)
+    assert cut.car_number is None, cut
+    assert decode_passage(_clean(117, repeats=2), samples_per_bit=8).car_number == 117
