@@ -83,6 +83,7 @@ class DecimalCommaCheck:
         positions = self._positions
         self._pairs = [(a, b) for a, b in zip(positions, positions[1:], strict=False) if b == a + 1]
         self._pointed: set[int] = set()  # value columns written with a decimal point somewhere
+        self._unpointed = list(positions)
         self.unnamed = FirstErrors(limit)
         self._sure = FirstErrors(limit)  # counts the certainly split lines; their _Split below
         self._sure_lines: list[_Split] = []
@@ -99,7 +100,11 @@ class DecimalCommaCheck:
                 f"line {line}, column {i + 1} (no name in the header): {fields[i].strip()!r}"
                 f" — the fraction of a decimal comma? {_FIX}; or name the column"
             )
-        self._pointed.update(i for i in self._positions if i < len(fields) and "." in fields[i])
+        if self._unpointed:  # soon empty: a file of decimals shows its points in a few rows
+            found = {i for i in self._unpointed if i < len(fields) and "." in fields[i]}
+            if found:
+                self._pointed |= found
+                self._unpointed = [i for i in self._unpointed if i not in found]
         pairs = self._split_candidates(fields)
         if not pairs:
             return
@@ -122,6 +127,8 @@ class DecimalCommaCheck:
             if b >= len(fields):
                 continue
             whole, fraction = fields[a].strip(), fields[b].strip()
+            if "." in whole or "." in fraction:  # a decimal: the common case, told at once
+                continue
             if not (_WHOLE.match(whole) and _DIGITS.match(fraction)):
                 continue
             # "05" is never how a number is written, only how a fraction is; otherwise a file

@@ -144,11 +144,14 @@ def _header(reader: Iterator[list[str]]) -> list[str]:
 
 @dataclass(frozen=True)
 class _Rows:
-    """What reading a row needs: the layout, the registered parameters and their plausible
-    ranges (looked up once: a value in its range needs no words), the book and the time."""
+    """What reading a row needs: the layout and its columns, the registered parameters and
+    their plausible ranges (looked up once: a value in its range needs no words), the book and
+    the server time."""
 
     long: bool
-    params: list[str]
+    car: int  # the columns, by their place in the header
+    taken_at: int
+    cells: list[tuple[str, int]]  # the value columns of a wide file; parameter, value of a long
     parameters: Mapping[str, Parameter]
     ranges: dict[str, tuple[float, float]]
     book: TestBook
@@ -166,7 +169,10 @@ def read_tests(
     long = set(LONG) <= set(header)
     params = [name for name in header if name not in KEYS and name]
     ranges = {name: plausible_range(parameter) for name, parameter in parameters.items()}
-    at = _Rows(long, params, parameters, ranges, TestBook(), utcnow() if now is None else now)
+    where = {name: i for i, name in enumerate(header)}
+    cells = [(name, where[name]) for name in (LONG if long else params)]
+    now = utcnow() if now is None else now
+    at = _Rows(long, where["car"], where["taken_at"], cells, parameters, ranges, TestBook(), now)
     found = FirstErrors(LIMITS.shown)
     found.extend([] if long else _unknown_columns(params, parameters))
     commas = DecimalCommaCheck(header, numeric=[] if long else params, limit=LIMITS.shown)
@@ -179,7 +185,7 @@ def read_tests(
         if shape:
             rows.add(shape)
             continue
-        rows.extend(_parse_row(at, dict(zip(header, fields, strict=True)), line))
+        rows.extend(_parse_row(at, fields, line))
     kinds = [found, commas.unnamed, commas.split_pairs(), rows]
     _raise(FirstErrors.joined(kinds, LIMITS.shown), _FIX_LINES)
     if not at.book:
@@ -194,32 +200,28 @@ def parse_tests(
     return list(read_tests(stream, parameters, now))
 
 
-def _parse_row(at: _Rows, row: dict[str, str], line: int) -> list[str]:
+def _parse_row(at: _Rows, fields: list[str], line: int) -> list[str]:
     """The row's errors, in the order its cells are read; its values go into the book."""
     errors: list[str] = []
-    car, when = (
-        (row.get("car") or "").strip(),
-        _when(row.get("taken_at") or "", line, errors, at.now),
-    )
+    car = fields[at.car].strip()
+    when = _when(fields[at.taken_at], line, errors, at.now)
     if not car:
         errors.append(f"line {line}: the car is empty")
     if at.long:
-        name = (row.get("parameter") or "").strip()
+        name = fields[at.cells[0][1]].strip()
         if not name:
             errors.append(f"line {line}: the parameter is empty")
-        cells = {name: row.get("value")} if name else {}
+        cells = [(name, fields[at.cells[1][1]])] if name else []
     else:
-        cells = {p: row.get(p) for p in at.params}
+        cells = [(name, fields[i]) for name, i in at.cells]
     values = {}
-    for name, text in cells.items():
-        if text is None or not text.strip():
-            continue
-        value = _number(text, line, name if not at.long else "value", errors)
-        if value is not None:
-            values[name] = value
-    if not all(
-        name in at.ranges and _within(value, at.ranges[name]) for name, value in values.items()
-    ):
+    for name, text in cells:
+        if text.strip():
+            value = _number(text, line, name if not at.long else "value", errors)
+            if value is not None:
+                values[name] = value
+    ranges = at.ranges
+    if not all(name in ranges and _within(value, ranges[name]) for name, value in values.items()):
         refused = value_problems(at.parameters, values)
         if not at.long:  # unknown columns were reported once, from the header
             refused = {k: v for k, v in refused.items() if k in at.parameters}
@@ -280,12 +282,12 @@ def _stored_marks(session: Session, tests: TestBook) -> bytearray:
     """Per test of the file, whether it is stored (``_NEW``, ``_SAME``, ``_OTHER``): the stored
     tests of the file's cars are read a chunk at a time, each looked up in the book."""
     marks = bytearray(len(tests))
-    layouts = session.execute(select(MeasurementLayout.id, MeasurementLayout.names)).tuples()
+    layouts = session.execute(select(MeasurementLayout.id, MeasurementLayout.names))
     names = {layout: layout_names for layout, layout_names in layouts}
     columns = (Measurement.car_id, Measurement.taken_at, Measurement.layout_id)
     query = select(*columns, Measurement.readings).where(Measurement.car_id.in_(tests.cars()))
     stored = session.execute(query.execution_options(yield_per=LIMITS.chunk))
-    for rows in stored.tuples().partitions():
+    for rows in stored.partitions():
         for car, at, layout, readings in rows:
             number = tests.find(car, at)
             if number is not None:
