@@ -264,8 +264,9 @@ def import_tests(session: Session, tests: TestBook) -> tuple[int, int]:
     marks = _stored_marks(session, tests)
     if _OTHER in marks:
         conflicts = FirstErrors(LIMITS.shown)
-        conflicts.extend(_conflict(car, at) for n, (car, at, _) in enumerate(tests) if
-                         marks[n] == _OTHER)  # fmt: skip
+        for number, (car, at, _) in enumerate(tests):
+            if marks[number] == _OTHER:
+                conflicts.add(_conflict(car, at))
         _raise(conflicts, _FIX_STORED)
     with session.begin_nested():
         return _insert_new(session, tests, marks)

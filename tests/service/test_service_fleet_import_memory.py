@@ -41,12 +41,12 @@ BENCH = (
     ("brake_pipe_bar", 5.0, 0.2),
 )
 CARS = [f"{n:04d}" for n in range(101, 261)]  # 160 cars
-ROWS = 240_000  # 1,500 tests a car: a few years of daily bench tests
+ROWS = 200_000  # 1,250 tests a car: a few years of daily bench tests (12 MB)
 # Peak RSS growth the import may take per value it must remember (its value, line and test),
-# on top of a fixed allowance for the chunk in flight and SQLite's page cache. The old import
-# took ≈ 600 bytes per value here; the streaming one ≈ 40.
-BYTES_PER_VALUE = 150
-FIXED_BYTES = 40 * 2**20
+# on top of a fixed allowance for the chunk in flight and SQLite's page cache. The import that
+# kept every row took ≈ 330 bytes per value here, the streaming one ≈ 50.
+BYTES_PER_VALUE = 100
+FIXED_BYTES = 32 * 2**20
 
 
 def _write_bench_csv(path: Path, rows: int, *, seed: int, year: int) -> int:
