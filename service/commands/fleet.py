@@ -36,7 +36,7 @@ class ProgressBar:
 
 
 def _import(args: argparse.Namespace) -> int:
-    from service.fleet.importing import import_tests, parse_tests
+    from service.fleet.importing import import_tests, read_tests
     from service.fleet.rules import registered
 
     path = Path(args.file)
@@ -45,7 +45,7 @@ def _import(args: argparse.Namespace) -> int:
     try:
         with get_sessionmaker().begin() as session:
             with path.open(newline="", encoding="utf-8-sig") as stream:
-                tests = parse_tests(stream, registered(session))
+                tests = read_tests(stream, registered(session))
             count, rows = import_tests(session, tests)
     except UnicodeDecodeError:
         return fail(f"{path} is not UTF-8 text; export the CSV as UTF-8")

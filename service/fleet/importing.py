@@ -9,6 +9,12 @@ is dated further ahead than the events' allowed clock skew (``DEPOT_MAX_CLOCK_SK
 with more or fewer fields than the header (a decimal comma, a lost separator) is refused.
 Importing the same file again stores nothing twice: a test already stored with the same values
 is skipped.
+
+The file is streamed: no row is kept, only what the checks must remember — each test's values
+with the line of each (`service.fleet.testbook`, compactly) and the first errors of each kind
+with a count. The stored tests of the file's cars are read a chunk at a time and looked up in
+the book; the new tests are inserted a chunk at a time in the caller's transaction, and a
+refusal rolls back what earlier chunks wrote (a savepoint), so it is still all rows or none.
 """
 
 from __future__ import annotations
@@ -16,9 +22,10 @@ from __future__ import annotations
 import csv
 import math
 import re
-from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
 from datetime import datetime
+from itertools import islice
 from typing import TextIO
 
 from sqlalchemy import select
@@ -28,22 +35,41 @@ from core.database import utcnow
 from core.errors import Unprocessable
 from core.models import Car
 from ingest.schemas import EARLIEST, LATEST
-from service.fleet.csv_checks import decimal_comma_problems
-from service.fleet.models import Measurement, Parameter
-from service.fleet.rules import ahead_problem, value_problems
-from service.fleet.service import insert_ignoring_repeats, measured_values, measurement_row
+from service.fleet.csv_checks import DecimalCommaCheck, FirstErrors
+from service.fleet.models import Measurement, MeasurementLayout, Parameter, decode_readings
+from service.fleet.rules import ahead_problem, plausible_range, value_problems
+from service.fleet.service import insert_ignoring_repeats, measurement_row, stored_test
+from service.fleet.testbook import Test, TestBook
 
 KEYS = ("car", "taken_at")
 LONG = ("parameter", "value")
 EXAMPLE = "car,taken_at,brake_cylinder_fill_s,door_close_s"
-_SHOWN = 5  # errors listed before "… and N more"
-_INSERT_CHUNK = 1000
 # A number as a CSV of measurements writes it: ASCII digits, an optional sign, point and
 # exponent. ``float`` also reads ``3.1_0``, Arabic-Indic or full-width digits; those are refused.
 _DECIMAL = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
 _BLANKS = " \t"
+_FIX_LINES = "fix these lines and import the file again (nothing was imported)"
+_FIX_STORED = "correct the file or the stored tests (nothing was imported)"
 
-Test = tuple[str, datetime, dict[str, float]]
+
+@dataclass(frozen=True)
+class ImportLimits:
+    """Tunables of the CSV import.
+
+    Attributes
+    ----------
+    shown : int
+        Errors listed in a refusal before "… and N more" (the others are only counted).
+    chunk : int
+        Tests checked against the stored ones and inserted at a time: bounds the insert rows
+        and stored tests held at once (and a query's bound parameters, two per test).
+    """
+
+    shown: int = 5
+    chunk: int = 1000
+
+
+LIMITS = ImportLimits()
 
 
 def _when(text: str, line: int, errors: list[str], now: datetime) -> datetime | None:
@@ -116,122 +142,106 @@ def _header(reader: Iterator[list[str]]) -> list[str]:
     return header
 
 
-@dataclass
-class _Parsed:
-    """What the rows held: each test's values with the line of every value, and the errors."""
+@dataclass(frozen=True)
+class _Rows:
+    """What reading a row needs: the layout and its columns, the registered parameters and
+    their plausible ranges (looked up once: a value in its range needs no words), the book and
+    the server time."""
 
-    errors: list[str] = field(default_factory=list)
-    tests: dict[tuple[str, datetime], dict[str, tuple[float, int]]] = field(default_factory=dict)
+    long: bool
+    car: int  # the columns, by their place in the header
+    taken_at: int
+    cells: list[tuple[str, int]]  # the value columns of a wide file; parameter, value of a long
+    parameters: Mapping[str, Parameter]
+    ranges: dict[str, tuple[float, float]]
+    book: TestBook
+    now: datetime
 
-    def add(self, car: str, at: datetime, values: Mapping[str, float], line: int) -> None:
-        """Merge a row's values into its test; a value contradicting an earlier row's is an
-        error naming both lines (the same value again, or other parameters, merge)."""
-        test = self.tests.setdefault((car, at), {})
-        for name, value in values.items():
-            before = test.get(name)
-            if before is not None and before[0] != value:
-                self.errors.append(
-                    f"lines {before[1]} and {line}: car {car} at {at.isoformat()} has"
-                    f" {name} = {before[0]:g} and {value:g}; keep the right one"
-                )
-                continue
-            test.setdefault(name, (value, line))
+
+def read_tests(
+    stream: TextIO, parameters: Mapping[str, Parameter], now: datetime | None = None
+) -> TestBook:
+    """The tests in a CSV file, read row by row and checked against the registered
+    ``parameters`` and the server time ``now`` (default: the clock); raises Unprocessable
+    listing the bad lines and columns (nothing is imported then)."""
+    reader = csv.reader(stream)
+    header = _header(reader)
+    long = set(LONG) <= set(header)
+    params = [name for name in header if name not in KEYS and name]
+    ranges = {name: plausible_range(parameter) for name, parameter in parameters.items()}
+    where = {name: i for i, name in enumerate(header)}
+    cells = [(name, where[name]) for name in (LONG if long else params)]
+    now = utcnow() if now is None else now
+    at = _Rows(long, where["car"], where["taken_at"], cells, parameters, ranges, TestBook(), now)
+    found = FirstErrors(LIMITS.shown)
+    found.extend([] if long else _unknown_columns(params, parameters))
+    commas = DecimalCommaCheck(header, numeric=[] if long else params, limit=LIMITS.shown)
+    rows = FirstErrors(LIMITS.shown)
+    for line, fields in enumerate(reader, start=2):
+        if not fields:
+            continue
+        commas.row(line, fields)
+        shape = _shape_problem(fields, line, len(header))
+        if shape:
+            rows.add(shape)
+            continue
+        rows.extend(_parse_row(at, fields, line))
+    kinds = [found, commas.unnamed, commas.split_pairs(), rows]
+    _raise(FirstErrors.joined(kinds, LIMITS.shown), _FIX_LINES)
+    if not at.book:
+        raise Unprocessable("the CSV holds no measurements; add rows under the header")
+    return at.book
 
 
 def parse_tests(
     stream: TextIO, parameters: Mapping[str, Parameter], now: datetime | None = None
 ) -> list[Test]:
-    """The tests in a CSV file, checked against the registered ``parameters`` and the server
-    time ``now`` (default: the clock); raises Unprocessable listing the bad lines and columns
-    (nothing is imported then)."""
-    now = utcnow() if now is None else now
-    reader = csv.reader(stream)
-    header = _header(reader)
-    rows = [(line, fields) for line, fields in enumerate(reader, start=2) if fields]
-    long = set(LONG) <= set(header)
-    params = [name for name in header if name not in KEYS and name]
-    parsed = _Parsed(errors=[] if long else _unknown_columns(params, parameters))
-    parsed.errors.extend(decimal_comma_problems(header, rows, numeric=[] if long else params))
-    for line, fields in rows:
-        shape = _shape_problem(fields, line, len(header))
-        if shape:
-            parsed.errors.append(shape)
-            continue
-        row = dict(zip(header, fields, strict=True))
-        _parse_row(row, line, long, params, parameters, parsed, now)
-    _raise(parsed.errors, "fix these lines and import the file again (nothing was imported)")
-    if not parsed.tests:
-        raise Unprocessable("the CSV holds no measurements; add rows under the header")
-    return [
-        (car, at, {name: value for name, (value, _) in values.items()})
-        for (car, at), values in parsed.tests.items()
-    ]
+    """:func:`read_tests` as a list of tests (a small file's; the import keeps the book)."""
+    return list(read_tests(stream, parameters, now))
 
 
-def _parse_row(
-    row: dict[str, str],
-    line: int,
-    long: bool,
-    params: list[str],
-    parameters: Mapping[str, Parameter],
-    parsed: _Parsed,
-    now: datetime,
-) -> None:
-    errors = parsed.errors
-    car, at = (row.get("car") or "").strip(), _when(row.get("taken_at") or "", line, errors, now)
+def _parse_row(at: _Rows, fields: list[str], line: int) -> list[str]:
+    """The row's errors, in the order its cells are read; its values go into the book."""
+    errors: list[str] = []
+    car = fields[at.car].strip()
+    when = _when(fields[at.taken_at], line, errors, at.now)
     if not car:
         errors.append(f"line {line}: the car is empty")
-    if long:
-        name = (row.get("parameter") or "").strip()
+    if at.long:
+        name = fields[at.cells[0][1]].strip()
         if not name:
             errors.append(f"line {line}: the parameter is empty")
-        cells = {name: row.get("value")} if name else {}
+        cells = [(name, fields[at.cells[1][1]])] if name else []
     else:
-        cells = {p: row.get(p) for p in params}
+        cells = [(name, fields[i]) for name, i in at.cells]
     values = {}
-    for name, text in cells.items():
-        if text is None or not text.strip():
-            continue
-        value = _number(text, line, name if not long else "value", errors)
-        if value is not None:
-            values[name] = value
-    refused = value_problems(parameters, values)
-    if not long:  # unknown columns were reported once, from the header
-        refused = {k: v for k, v in refused.items() if k in parameters}
-    errors.extend(f"line {line}, column {name}: {why}" for name, why in refused.items())
-    if car and at is not None and values:
-        parsed.add(car, at, values, line)
+    for name, text in cells:
+        if text.strip():
+            value = _number(text, line, name if not at.long else "value", errors)
+            if value is not None:
+                values[name] = value
+    ranges = at.ranges
+    if not all(name in ranges and _within(value, ranges[name]) for name, value in values.items()):
+        refused = value_problems(at.parameters, values)
+        if not at.long:  # unknown columns were reported once, from the header
+            refused = {k: v for k, v in refused.items() if k in at.parameters}
+        errors.extend(f"line {line}, column {name}: {why}" for name, why in refused.items())
+    if car and when is not None and values:
+        errors.extend(at.book.add(car, when, values, line))
+    return errors
 
 
-def _raise(errors: list[str], fix: str) -> None:
-    if errors:
-        more = f"; … and {len(errors) - _SHOWN} more" if len(errors) > _SHOWN else ""
-        raise Unprocessable(f"{'; '.join(errors[:_SHOWN])}{more} — {fix}")
+def _within(value: float, limits: tuple[float, float]) -> bool:
+    return limits[0] <= value <= limits[1]
 
 
-def _already_stored(session: Session, tests: list[Test]) -> tuple[list[Test], list[str]]:
-    """The tests not stored yet, and the conflicts: a stored test with other values."""
-    cars = {car for car, _, _ in tests}
-    stored: dict[tuple[str, datetime], dict[str, float]] = {}
-    for row in session.scalars(select(Measurement).where(Measurement.car_id.in_(cars))):
-        stored[(row.car_id, row.taken_at)] = measured_values(session, row)
-    new, conflicts = [], []
-    for car, at, values in tests:
-        before = stored.get((car, at))
-        if before is None:
-            new.append((car, at, values))
-        elif before != values:
-            conflicts.append(f"car {car} at {at.isoformat()} is stored with other values")
-    return new, conflicts
+def _raise(errors: FirstErrors, fix: str) -> None:
+    if errors.count:
+        more = f"; … and {errors.count - errors.limit} more" if errors.count > errors.limit else ""
+        raise Unprocessable(f"{'; '.join(errors.shown)}{more} — {fix}")
 
 
-def import_tests(session: Session, tests: Iterable[Test]) -> tuple[int, int]:
-    """Store parsed tests (source ``csv``), one row each; returns (tests, values) stored.
-
-    Tests already stored with the same values are skipped (a re-import stores nothing).
-    """
-    tests = list(tests)
-    cars = {car for car, _, _ in tests}
+def _refuse_unknown_cars(session: Session, cars: set[str]) -> None:
     known = set(session.scalars(select(Car.id).where(Car.id.in_(cars))))
     unknown = sorted(cars - known)
     if unknown:
@@ -240,20 +250,69 @@ def import_tests(session: Session, tests: Iterable[Test]) -> tuple[int, int]:
             f"unknown car(s) {listed}; register them (POST /api/v1/cars) or correct the car"
             " column, then import again (nothing was imported)"
         )
-    tests, conflicts = _already_stored(session, tests)
-    _raise(conflicts, "correct the file or the stored tests (nothing was imported)")
+
+
+def import_tests(session: Session, tests: TestBook) -> tuple[int, int]:
+    """Store the read tests (source ``csv``), one row each; returns (tests, values) stored.
+
+    Tests already stored with the same values are skipped (a re-import stores nothing); a
+    stored test with other values refuses the file. The new tests are inserted a chunk at a
+    time; a refusal rolls back what earlier chunks wrote (a savepoint, whatever the caller
+    does with the error).
+    """
+    _refuse_unknown_cars(session, tests.cars())
+    marks = _stored_marks(session, tests)
+    if _OTHER in marks:
+        conflicts = FirstErrors(LIMITS.shown)
+        for number, (car, at, _) in enumerate(tests):
+            if marks[number] == _OTHER:
+                conflicts.add(_conflict(car, at))
+        _raise(conflicts, _FIX_STORED)
+    with session.begin_nested():
+        return _insert_new(session, tests, marks)
+
+
+_NEW, _SAME, _OTHER = 0, 1, 2  # a test of the file: not stored, stored as it is, stored otherwise
+
+
+def _conflict(car: str, at: datetime) -> str:
+    return f"car {car} at {at.isoformat()} is stored with other values"
+
+
+def _stored_marks(session: Session, tests: TestBook) -> bytearray:
+    """Per test of the file, whether it is stored (``_NEW``, ``_SAME``, ``_OTHER``): the stored
+    tests of the file's cars are read a chunk at a time, each looked up in the book."""
+    marks = bytearray(len(tests))
+    layouts = session.execute(select(MeasurementLayout.id, MeasurementLayout.names))
+    names = {layout: layout_names for layout, layout_names in layouts}
+    columns = (Measurement.car_id, Measurement.taken_at, Measurement.layout_id)
+    query = select(*columns, Measurement.readings).where(Measurement.car_id.in_(tests.cars()))
+    stored = session.execute(query.execution_options(yield_per=LIMITS.chunk))
+    for rows in stored.partitions():
+        for car, at, layout, readings in rows:
+            number = tests.find(car, at)
+            if number is not None:
+                values = dict(zip(names[layout], decode_readings(readings), strict=True))
+                marks[number] = _SAME if values == tests.values_of(number) else _OTHER
+    return marks
+
+
+def _insert_new(session: Session, tests: TestBook, marks: bytearray) -> tuple[int, int]:
     layouts: dict[str, int] = {}
-    rows = [measurement_row(session, c, at, v, source="csv", known=layouts) for c, at, v in tests]
     statement = insert_ignoring_repeats(session).returning(Measurement.car_id, Measurement.taken_at)
-    written: set[tuple[str, datetime]] = set()
-    for start in range(0, len(rows), _INSERT_CHUNK):
-        chunk = rows[start : start + _INSERT_CHUNK]
-        written.update((car, at) for car, at in session.connection().execute(statement, chunk))
-    if len(written) < len(rows):
-        # A concurrent import stored some of these tests after the check: the same values
-        # are skipped, other values refuse the whole file as any conflict does.
-        _raise(_already_stored(session, tests)[1], "correct the file or the stored tests"
-               " (nothing was imported)")  # fmt: skip
+    conflicts = FirstErrors(LIMITS.shown)
+    done = values = 0
+    each = (test for number, test in enumerate(tests) if marks[number] == _NEW)
+    while new := list(islice(each, LIMITS.chunk)):
+        rows = [measurement_row(session, c, at, v, source="csv", known=layouts) for c, at, v in new]
+        written = {(car, at) for car, at in session.connection().execute(statement, rows)}
+        for car, at, test in new:
+            if (car, at) in written:
+                done, values = done + 1, values + len(test)
+            elif stored_test(session, car, at) != test:
+                # A concurrent import stored this test after the check: the same values are
+                # skipped, other values refuse the whole file as any conflict does.
+                conflicts.add(_conflict(car, at))
+    _raise(conflicts, _FIX_STORED)
     session.flush()
-    done = [(car, at, v) for car, at, v in tests if (car, at) in written]
-    return len(done), sum(len(v) for _, _, v in done)
+    return done, values
