@@ -1,9 +1,10 @@
 """Labelled scenes for training and evaluating the tail check, from both generators.
 
-Generator A is :mod:`tail_check.synth`, generator B :mod:`tail_check.scenes_b`
-(written independently). Seeds are split into named ranges so that training,
-validation and held-out evaluation never share a scene. Rendered scenes can be
-cached as lossless PNG (the image already went through the generator's JPEG
+Generator A is the domain-randomised :mod:`tail_check.synth_wide` (the scenes of
+:mod:`tail_check.synth` with every paint, size, turn and light widened), generator B
+:mod:`tail_check.scenes_b` (written independently). Seeds are split into named
+ranges so that training, validation and held-out evaluation never share a scene.
+Rendered scenes can be cached as lossless PNG (the image already went through the generator's JPEG
 round trip, so the cache is exact) because generator B takes seconds per scene.
 
 Real photos (``railsem19_frames``, ``red_wagons``) are read from a folder outside
@@ -24,8 +25,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from . import synth
 from .scenes_b import render_scene
+from .synth_wide import random_wide_snapshot
 
 __all__ = [
     "GENERATORS",
@@ -83,7 +84,7 @@ class Sample:
 def _scene_a(seed: int) -> Sample:
     rng = np.random.default_rng(seed)
     size = SIZES_A[int(rng.integers(len(SIZES_A)))]
-    image, label = synth.random_snapshot(rng, size=size)
+    image, label = random_wide_snapshot(rng, size=size)
     kind = "disc" if label.disc else (label.distractors[0] if label.distractors else "none")
     return Sample(image, label.disc, label.condition, kind, "A", str(seed), label.bbox)
 

@@ -50,9 +50,10 @@ FEATURE_NAMES: tuple[str, ...] = (
     "sector_min_contrast",
     "sector_max_contrast",
     "centre_brightness",
-    "in_band_share",
+    "in_wb_redness",
+    "wb_redness_contrast",
     "response",
-    "source",
+    "lit",
     "scene_bright",
     "scene_red_share",
     *(f"{m}_r{i}" for m in ("redness", "value", "chroma") for i in range(6)),
@@ -166,7 +167,8 @@ def _shape(filled: NDArray[np.uint8], comp_area: float) -> list[float] | None:
 
 
 def _cells(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> NDArray[np.float64] | None:
-    """Sums of (1, redness, chroma, value, evidence, band, redness²) per (ring, sector).
+    """Sums of (1, redness, chroma, value, evidence, balanced redness, redness²) per
+    (ring, sector).
 
     Large candidates are sampled on a grid (``samples_per_radius``).
     """
@@ -206,7 +208,7 @@ def _zone_stats(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> li
     centre = zone(0)
     if inner is None or rim is None or outer is None:
         return None
-    red_i, chro_i, val_i, ev_i, band_i, red2_i = inner
+    red_i, chro_i, val_i, ev_i, wb_i, red2_i = inner
     sec = cells[list(c.outer_rings)].sum(axis=0)  # (sector, channel)
     seen = sec[:, 0] > 0
     per_sector = ev_i - sec[seen, 4] / sec[seen, 0]
@@ -237,7 +239,8 @@ def _zone_stats(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> li
         float(per_sector.min()),
         float(per_sector.max()),
         v_centre / max(val_i, 1e-3),
-        band_i,
+        wb_i,
+        wb_i - outer[4],
         *profile[:, 0].tolist(),
         *profile[:, 2].tolist(),
         *profile[:, 1].tolist(),
@@ -266,7 +269,9 @@ def describe(
     if stats is None:
         return None
     feats = [2 * r / m.work_side, r / pr.r, *shape, *stats]
-    feats += [pr.response, float(pr.source), *scene]
+    # Which proposal found it says more about the generator's paint than about the
+    # disc (the paper's band is one camera's signal red); only "lit spot" is kept.
+    feats += [pr.response, float(pr.source == LIT_SOURCE), *scene]
     ox, oy = m.origin
     bbox = (
         ox + int(round((cx - r) / m.scale)),
