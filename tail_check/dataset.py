@@ -46,6 +46,9 @@ SIZES_A: tuple[tuple[int, int], ...] = ((640, 480), (800, 600), (1024, 768), (12
 SIZE_B = (640, 480)
 """Generator B renders at this size here (it takes about 1 s per scene at 640x480 on one
 core, 4-15 s at its own 800x600..1920x1080; the detector works at a fixed scale)."""
+CACHE_TAGS: dict[str, str] = {"A": "Awide1", "B": "B"}
+"""Cache file prefix per generator; a new tag when a generator's scenes change, so a
+cache written by an older version is never read as the new one."""
 REAL_DIR_DEFAULT = "/work/shared/data/real"
 REAL_SETS = ("railsem19_frames", "red_wagons")
 
@@ -105,7 +108,8 @@ def _cached(generator: Generator, seed: int) -> Sample:
     cache = _cache_dir()
     if cache is None:
         return render(seed)
-    png, meta = cache / f"{generator}_{seed}.png", cache / f"{generator}_{seed}.json"
+    tag = CACHE_TAGS[generator]
+    png, meta = cache / f"{tag}_{seed}.png", cache / f"{tag}_{seed}.json"
     if png.is_file() and meta.is_file():
         image = cv2.imread(str(png), cv2.IMREAD_COLOR)
         info = json.loads(meta.read_text(encoding="utf-8"))

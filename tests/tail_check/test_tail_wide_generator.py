@@ -111,3 +111,21 @@ def test_white_balanced_redness_survives_a_colour_cast() -> None:
     wb = FEATURE_NAMES.index("in_wb_redness")
     raw = FEATURE_NAMES.index("in_redness")
     assert abs(shifted[wb] - plain[wb]) < 0.5 * abs(shifted[raw] - plain[raw])
+
+
+def test_a_cache_of_the_reference_generator_is_not_read(
+    tmp_path: pytest.TempPathFactory, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import cv2
+
+    from tail_check import synth
+
+    old, _ = synth.random_snapshot(np.random.default_rng(100_000))
+    cv2.imwrite(str(tmp_path / "A_100000.png"), old)  # type: ignore[operator]
+    meta = '{"disc": false, "condition": "day", "kind": "none", "bbox": null}'
+    (tmp_path / "A_100000.json").write_text(meta, encoding="utf-8")  # type: ignore[operator]
+    monkeypatch.setenv("DEPOT_TAIL_CACHE", str(tmp_path))
+    cached = next(scenes("A", "train", 1))
+    assert not np.array_equal(cached.image, old)
+    again = next(scenes("A", "train", 1))
+    assert np.array_equal(cached.image, again.image)
