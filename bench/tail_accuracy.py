@@ -16,27 +16,29 @@ question, see :class:`tail_check.pipeline.VerdictParams`).
 The hand-tuned detector has no training, so for it (a) and (b) are the same scenes.
 Rendered scenes are cached under ``var/tail_cache`` (``DEPOT_TAIL_CACHE``).
 
-Measured once on the held-out seeds (150 per generator; generator A is the
-domain-randomised :mod:`tail_check.synth_wide`; real photos 17 report + 18 train; models
-``verifier_{A,B,AB}.json`` from ``depot tail-train --seed 1 --count 400 --validation
-300``), correct / uncertain / false present:
+Measured (150 held-out seeds per generator; real photos 17 report + 18 train; models
+``verifier_{A,B,AB}.json`` from ``depot tail-train --seed 1``), correct / uncertain /
+false present:
 
 =========  ============  ===================  ==================  ======================
-variant    A own         A cross (B's model)  B own               B cross (A's model)
+variant    A own         A cross (on B's)     B own               B cross (on A's)
 =========  ============  ===================  ==================  ======================
-baseline   61.3/8.0/0    (no training)        53.3/4.7/0          (no training)
-learned    68.0/9.3/1    53.3/10.0/0          52.0/12.7/0         58.0/14.0/5
-guarded    57.3/21.3/0   53.3/16.0/0          51.3/8.0/0          50.0/16.7/0
+baseline   96.7/2.0/1    (no training)        53.3/4.7/0          (no training)
+learned    88.0/11.3/0   69.3/22.7/0          47.3/22.0/0         50.0/23.3/1 (B:300118)
+guarded    96.0/3.3/0    90.0/9.3/0           52.7/5.3/0          52.7/8.7/0
 =========  ============  ===================  ==================  ======================
 
-The learned verifier trained on generator A alone calls 5 of B's 76 scenes without a
-disc ``present`` (3 electric tail lamps, a signal light, red lettering: B:300000,
-300108, 300117, 300118, 300148); generator A draws no tail lamps. The verifier of A's
-own held-out seeds has one false ``present`` (A:300087, a red square plate). Real
-photos: no ``present`` for any variant or model. The targets (>= 95 % correct
-cross-generator) are not met; most discs of either generator stay ``absent`` or
-``uncertain`` because the ``present`` threshold, set above the highest validation
-negative, is 0.92 (A), 0.987 (B) and 0.995 (AB).
+Real photos: no ``present`` for any variant or model (report part: learned 1/17
+``uncertain`` with model A, guarded 0/17). The targets (>= 95 % cross-generator) are
+not met on generator B: most of B's discs (pinkish paint, turned edge-on, on red
+bodies, small at dusk) are ``absent`` for every variant.
+
+Tried and not shipped (issue 11, branch ``tail-accuracy2``, commit 4d78504): verifiers
+trained on the domain-randomised generator A (:mod:`tail_check.synth_wide`) with
+white-balanced colour features. Measured once on the held-out seeds, B cross (A's
+model): learned 58.0/14.0/5 false present (electric tail lamps, which generator A does
+not draw), guarded 50.0/16.7/0; the AB model's ``present`` threshold (0.995) left the
+clearest disc ``uncertain``.
 
 Run: ``.venv/bin/python -m bench.tail_accuracy [--count N] [--variant NAME ...]``
 """

@@ -1,10 +1,9 @@
 """Labelled scenes for training and evaluating the tail check, from both generators.
 
-Generator A is the domain-randomised :mod:`tail_check.synth_wide` (the scenes of
-:mod:`tail_check.synth` with every paint, size, turn and light widened), generator B
-:mod:`tail_check.scenes_b` (written independently). Seeds are split into named
-ranges so that training, validation and held-out evaluation never share a scene.
-Rendered scenes can be cached as lossless PNG (the image already went through the generator's JPEG
+Generator A is :mod:`tail_check.synth`, generator B :mod:`tail_check.scenes_b`
+(written independently). Seeds are split into named ranges so that training,
+validation and held-out evaluation never share a scene. Rendered scenes can be
+cached as lossless PNG (the image already went through the generator's JPEG
 round trip, so the cache is exact) because generator B takes seconds per scene.
 
 Real photos (``railsem19_frames``, ``red_wagons``) are read from a folder outside
@@ -25,8 +24,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from . import synth
 from .scenes_b import render_scene
-from .synth_wide import random_wide_snapshot
 
 __all__ = [
     "GENERATORS",
@@ -46,9 +45,6 @@ SIZES_A: tuple[tuple[int, int], ...] = ((640, 480), (800, 600), (1024, 768), (12
 SIZE_B = (640, 480)
 """Generator B renders at this size here (it takes about 1 s per scene at 640x480 on one
 core, 4-15 s at its own 800x600..1920x1080; the detector works at a fixed scale)."""
-CACHE_TAGS: dict[str, str] = {"A": "Awide1", "B": "B"}
-"""Cache file prefix per generator; a new tag when a generator's scenes change, so a
-cache written by an older version is never read as the new one."""
 REAL_DIR_DEFAULT = "/work/shared/data/real"
 REAL_SETS = ("railsem19_frames", "red_wagons")
 
@@ -87,7 +83,7 @@ class Sample:
 def _scene_a(seed: int) -> Sample:
     rng = np.random.default_rng(seed)
     size = SIZES_A[int(rng.integers(len(SIZES_A)))]
-    image, label = random_wide_snapshot(rng, size=size)
+    image, label = synth.random_snapshot(rng, size=size)
     kind = "disc" if label.disc else (label.distractors[0] if label.distractors else "none")
     return Sample(image, label.disc, label.condition, kind, "A", str(seed), label.bbox)
 
@@ -108,8 +104,7 @@ def _cached(generator: Generator, seed: int) -> Sample:
     cache = _cache_dir()
     if cache is None:
         return render(seed)
-    tag = CACHE_TAGS[generator]
-    png, meta = cache / f"{tag}_{seed}.png", cache / f"{tag}_{seed}.json"
+    png, meta = cache / f"{generator}_{seed}.png", cache / f"{generator}_{seed}.json"
     if png.is_file() and meta.is_file():
         image = cv2.imread(str(png), cv2.IMREAD_COLOR)
         info = json.loads(meta.read_text(encoding="utf-8"))

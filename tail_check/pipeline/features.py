@@ -50,10 +50,9 @@ FEATURE_NAMES: tuple[str, ...] = (
     "sector_min_contrast",
     "sector_max_contrast",
     "centre_brightness",
-    "in_wb_redness",
-    "wb_redness_contrast",
+    "in_band_share",
     "response",
-    "lit",
+    "source",
     "scene_bright",
     "scene_red_share",
     *(f"{m}_r{i}" for m in ("redness", "value", "chroma") for i in range(6)),
@@ -167,8 +166,7 @@ def _shape(filled: NDArray[np.uint8], comp_area: float) -> list[float] | None:
 
 
 def _cells(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> NDArray[np.float64] | None:
-    """Sums of (1, redness, chroma, value, evidence, balanced redness, redness²) per
-    (ring, sector).
+    """Sums of (1, redness, chroma, value, evidence, band, redness²) per (ring, sector).
 
     Large candidates are sampled on a grid (``samples_per_radius``).
     """
@@ -208,7 +206,7 @@ def _zone_stats(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> li
     centre = zone(0)
     if inner is None or rim is None or outer is None:
         return None
-    red_i, chro_i, val_i, ev_i, wb_i, red2_i = inner
+    red_i, chro_i, val_i, ev_i, band_i, red2_i = inner
     sec = cells[list(c.outer_rings)].sum(axis=0)  # (sector, channel)
     seen = sec[:, 0] > 0
     per_sector = ev_i - sec[seen, 4] / sec[seen, 0]
@@ -239,8 +237,7 @@ def _zone_stats(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> li
         float(per_sector.min()),
         float(per_sector.max()),
         v_centre / max(val_i, 1e-3),
-        wb_i,
-        wb_i - outer[4],
+        band_i,
         *profile[:, 0].tolist(),
         *profile[:, 2].tolist(),
         *profile[:, 1].tolist(),
@@ -269,9 +266,7 @@ def describe(
     if stats is None:
         return None
     feats = [2 * r / m.work_side, r / pr.r, *shape, *stats]
-    # Which proposal found it says more about the generator's paint than about the
-    # disc (the paper's band is one camera's signal red); only "lit spot" is kept.
-    feats += [pr.response, float(pr.source == LIT_SOURCE), *scene]
+    feats += [pr.response, float(pr.source), *scene]
     ox, oy = m.origin
     bbox = (
         ox + int(round((cx - r) / m.scale)),

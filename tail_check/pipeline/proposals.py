@@ -65,9 +65,6 @@ class ProposalParams:
         Radii kept.
     max_blobs, max_regions : int
         Strongest blobs / largest regions kept per scale or level.
-    white_quantile, white_gain_range : float, (float, float)
-        The crop's white per channel (this quantile) and the bounds of the white
-        balance gains taken from it (a red car filling the frame is not "white").
     """
 
     work_side: float = 320.0
@@ -84,8 +81,6 @@ class ProposalParams:
     radius_range: tuple[float, float] = (0.006, 0.14)
     max_blobs: int = 8
     max_regions: int = 4
-    white_quantile: float = 0.9
-    white_gain_range: tuple[float, float] = (0.6, 1.6)
 
 
 PROPOSAL_PARAMS = ProposalParams()
@@ -119,8 +114,7 @@ class Maps:
     scale: float
     work_side: float
     stack: F32
-    """(h, w, 7): 1, redness, chroma, value, evidence, white-balanced redness, redness²
-    (for zone sums)."""
+    """(h, w, 7): 1, redness, chroma, value, evidence, band, redness² (for zone sums)."""
 
 
 @dataclass(frozen=True)
@@ -169,26 +163,10 @@ def make_maps(
     value = np.asarray(np.clip(top / (255.0 * bright), 0.0, 1.0), np.float32)
     evidence = np.asarray(redness * np.clip(value / c.value_knee, 0.0, 1.0), np.float32)
     ones = np.ones_like(redness)
-    wb = _balanced_redness(bgr, c)
-    stack = np.dstack([ones, redness, chroma, value, evidence, wb, redness**2])
+    stack = np.dstack([ones, redness, chroma, value, evidence, band.astype(np.float32), redness**2])
     return Maps(
         bgr, redness, chroma, value, evidence, band, bright, (x, y), scale, c.work_side, stack
     )
-
-
-def _balanced_redness(bgr: F32, c: ProposalParams) -> F32:
-    """Redness after the crop's own white balance (a white patch per channel).
-
-    A camera's cast or a dusk sky tints everything the same way; dividing each channel
-    by its bright level removes it, so the verifier compares a disc's red with the
-    scene's own white, not with one camera's signal red.
-    """
-    flat = bgr.reshape(-1, 3)
-    k = int(c.white_quantile * (flat.shape[0] - 1))
-    white = np.partition(flat, k, axis=0)[k] + EPS
-    gains = np.clip(white.mean() / white, c.white_gain_range[0], c.white_gain_range[1])
-    b, g, r = (bgr[..., i] * np.float32(gains[i]) for i in range(3))
-    return np.asarray(np.clip((r - np.maximum(g, b)) / (r + EPS), 0.0, 1.0), np.float32)
 
 
 def _blobs(m: Maps, c: ProposalParams, lit: bool) -> list[Proposal]:

@@ -32,7 +32,7 @@ class VerifierParams:
     one generator's rendering details.
     """
 
-    n_estimators: int = 250
+    n_estimators: int = 150
     max_depth: int = 3
     learning_rate: float = 0.08
     subsample: float = 0.8

@@ -20,11 +20,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from tail_check import detect, synth
-from tail_check.dataset import SIZES_A, SPLITS, Sample, real_dir, real_photos, scenes
+from tail_check import detect
+from tail_check.dataset import Sample, real_dir, real_photos, scenes
 from tail_check.evaluate import Tally
 from tail_check.pipeline import (
     PIPELINE_PROFILE,
@@ -61,91 +60,36 @@ def _judged(samples: list[Sample], models: tuple[str, ...]) -> dict[tuple[str, s
     return out
 
 
-GUARDED_A, GUARDED_B = 0.633, 0.467
 EXPECTED = {
-    ("A", "learned"): (0.600, 0.56),
-    ("B", "learned"): (0.567, 0.53),
-    ("A", "guarded"): (GUARDED_A, GUARDED_A - 0.04),
-    ("B", "guarded"): (GUARDED_B, GUARDED_B - 0.04),
+    ("A", "learned"): (0.70, 0.63),
+    ("B", "learned"): (0.50, 0.43),
+    ("A", "guarded"): (0.90, 0.83),
+    ("B", "guarded"): (0.50, 0.43),
 }
 """(measured share correct, floor asserted) per generator and variant on these seeds."""
 
-UNSAFE = {("B", "learned")}
-"""Measured false `present` on these seeds: the verifier trained on generator A alone
-calls one of B's electric tail lamps (B:300000) a disc; generator A draws no tail
-lamps. Asserted as a strict expected failure: it must be fixed, not hidden."""
 
-
-_TALLIES: dict[str, dict[tuple[str, str], Tally]] = {}
-
-
-def _cross(generator: str) -> dict[tuple[str, str], Tally]:
-    """Tallies of one generator's first ``COUNT`` held-out seeds judged by the other
-    generator's verifier (computed once per test session)."""
-    if generator not in _TALLIES:
-        other = "B" if generator == "A" else "A"
-        samples = list(scenes(generator, "heldout", COUNT))  # type: ignore[arg-type]
-        _TALLIES[generator] = _judged(samples, (other,))
-        for (_, variant), result in _TALLIES[generator].items():
-            print("\n".join(result.lines(f"{variant}: generator {generator}, trained on {other}")))
-    return _TALLIES[generator]
-
-
-def _case(generator: str, variant: str) -> Tally:
+@pytest.mark.parametrize("generator", ["A", "B"])
+def test_cross_generator_no_false_present_and_accuracy(generator: str) -> None:
     other = "B" if generator == "A" else "A"
-    result = _cross(generator)[(other, variant)]
-    assert result.overall.total == COUNT
-    return result
-
-
-CASES = [(g, v) for g in ("A", "B") for v in VARIANTS]
-
-
-@pytest.mark.parametrize(("generator", "variant"), CASES)
-def test_cross_generator_accuracy(generator: str, variant: str) -> None:
-    result = _case(generator, variant)
-    measured, floor = EXPECTED[(generator, variant)]
-    assert result.overall.correct >= floor, (variant, result.overall.summary(), measured)
-
-
-@pytest.mark.parametrize(
-    ("generator", "variant"),
-    [
-        pytest.param(
-            g,
-            v,
-            marks=pytest.mark.xfail(strict=True, reason="measured false present, see UNSAFE")
-            if (g, v) in UNSAFE
-            else (),
-        )
-        for g, v in CASES
-    ],
-)
-def test_cross_generator_no_false_present(generator: str, variant: str) -> None:
-    result = _case(generator, variant)
-    assert result.overall.false_present == 0, (variant, result.false_present_names)
-
-
-def _reference_hand_wheel() -> Sample:
-    """Held-out scene 44 of the reference generator A (before its randomisation): a
-    red hand wheel the hand-tuned detector calls a disc."""
-    seed = SPLITS["heldout"] + 44
-    rng = np.random.default_rng(seed)
-    size = SIZES_A[int(rng.integers(len(SIZES_A)))]
-    image, label = synth.random_snapshot(rng, size=size)
-    kind = label.distractors[0] if label.distractors else "none"
-    return Sample(image, label.disc, label.condition, kind, "A", str(seed), label.bbox)
+    samples = list(scenes(generator, "heldout", COUNT))  # type: ignore[arg-type]
+    for (_, variant), result in _judged(samples, (other,)).items():
+        print("\n".join(result.lines(f"{variant}: generator {generator}, trained on {other}")))
+        assert result.overall.total == COUNT
+        assert result.overall.false_present == 0, (variant, result.false_present_names)
+        measured, floor = EXPECTED[(generator, variant)]
+        assert result.overall.correct >= floor, (variant, result.overall.summary(), measured)
 
 
 @pytest.mark.xfail(strict=True, reason="known false present of the hand-tuned detector")
 def test_hand_tuned_detector_alone_calls_a_hand_wheel_a_disc() -> None:
-    sample = _reference_hand_wheel()
+    sample = next(scenes("A", "heldout", 1, offset=44))
     assert not sample.disc and sample.kind == "hand_wheel"
     assert detect(sample.image).verdict != "present"
 
 
 def test_guarded_verifier_questions_that_hand_wheel() -> None:
-    sample = _reference_hand_wheel()
+    sample = next(scenes("A", "heldout", 1, offset=44))
     guarded = VerdictParams(combine="guarded")
     for name in ("B", "AB"):
         assert run_pipeline(sample.image, model=load_model(name), params=guarded).verdict != (
