@@ -33,6 +33,13 @@ Real photos: no ``present`` for any variant or model (report part: learned 1/17
 not met on generator B: most of B's discs (pinkish paint, turned edge-on, on red
 bodies, small at dusk) are ``absent`` for every variant.
 
+Tried and not shipped (issue 11, branch ``tail-accuracy2``, commit 4d78504): verifiers
+trained on the domain-randomised generator A (:mod:`tail_check.synth_wide`) with
+white-balanced colour features. Measured once on the held-out seeds, B cross (A's
+model): learned 58.0/14.0/5 false present (electric tail lamps, which generator A does
+not draw), guarded 50.0/16.7/0; the AB model's ``present`` threshold (0.995) left the
+clearest disc ``uncertain``.
+
 Run: ``.venv/bin/python -m bench.tail_accuracy [--count N] [--variant NAME ...]``
 """
 
@@ -41,55 +48,79 @@ from __future__ import annotations
 import argparse
 import os
 import time
-from collections.abc import Callable
+from dataclasses import dataclass
 
 import cv2
 
 from tail_check import detect
 from tail_check.dataset import Sample, real_dir, real_photos, scenes
-from tail_check.evaluate import tally
+from tail_check.evaluate import Tally
+from tail_check.pipeline import (
+    PIPELINE_PROFILE,
+    Candidate,
+    VerdictParams,
+    find_candidates,
+    judge,
+    load_model,
+)
 
 cv2.setNumThreads(1)
-Verdictor = Callable[[Sample], str]
-
-
-def _baseline(sample: Sample) -> str:
-    return detect(sample.image).verdict
-
-
-def _judge(combine: str, model_name: str) -> Verdictor:
-    from tail_check.pipeline import VerdictParams, load_model, run_pipeline
-
-    model = load_model(model_name)
-    params = VerdictParams(combine=combine)  # type: ignore[arg-type]
-
-    def verdict(s: Sample) -> str:
-        return run_pipeline(s.image, model=model, params=params).verdict
-
-    return verdict
-
-
+MODELS = ("A", "B", "AB")
 Photos = dict[str, list[Sample]]
 
 
-def _report(variant: str, held: dict[str, list[Sample]], photos: Photos) -> None:
+@dataclass(frozen=True)
+class Seen:
+    """What every variant needs of one sample, computed once: the hand-tuned verdict
+    and the pipeline's candidates (each model then only scores them)."""
+
+    sample: Sample
+    hand: str
+    candidates: list[Candidate]
+
+
+def _seen(samples: list[Sample]) -> list[Seen]:
+    return [
+        Seen(s, detect(s.image).verdict, find_candidates(s.image, PIPELINE_PROFILE)[0])
+        for s in samples
+    ]
+
+
+def _tally(seen: list[Seen], variant: str, model: str | None) -> Tally:
+    out = Tally()
+    params = VerdictParams(combine=variant)  # type: ignore[arg-type]
+    for item in seen:
+        if model is None:
+            verdict = item.hand
+        else:
+            verdict = judge(item.candidates, load_model(model), params, item.hand)[0]  # type: ignore[arg-type]
+        out.add(item.sample, verdict)
+    return out
+
+
+def _report(
+    variant: str,
+    held: dict[str, list[Seen]],
+    photos: dict[str, list[Seen]],
+    models: tuple[str, ...] = MODELS,
+) -> None:
     if variant == "baseline":
         for g in ("A", "B"):
-            print("\n".join(tally(held[g], _baseline).lines(f"baseline: generator {g}")))
+            print("\n".join(_tally(held[g], variant, None).lines(f"baseline: generator {g}")))
         for part, ps in photos.items():
-            print("\n".join(tally(ps, _baseline).lines(f"baseline: real photos ({part})")))
+            print("\n".join(_tally(ps, variant, None).lines(f"baseline: real photos ({part})")))
         return
     if variant not in ("guarded", "learned"):
         raise SystemExit(f"unknown variant {variant!r}; use baseline, guarded or learned")
     for g in ("A", "B"):
         other = "B" if g == "A" else "A"
-        own = tally(held[g], _judge(variant, g))
+        own = _tally(held[g], variant, g)
         print("\n".join(own.lines(f"{variant}: generator {g}, own (trained on {g})")))
-        cross = tally(held[g], _judge(variant, other))
+        cross = _tally(held[g], variant, other)
         print("\n".join(cross.lines(f"{variant}: generator {g}, CROSS (trained on {other})")))
-    for name in ("A", "B", "AB"):
+    for name in models:
         for part, ps in photos.items():
-            real = tally(ps, _judge(variant, name))
+            real = _tally(ps, variant, name)
             print("\n".join(real.lines(f"{variant}: real photos, {part} part (trained on {name})")))
 
 
@@ -97,17 +128,18 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--count", type=int, default=150, help="held-out scenes per generator")
     parser.add_argument("--variant", nargs="+", default=["baseline", "learned", "guarded"])
+    parser.add_argument("--models", nargs="+", default=list(MODELS), help="for the real photos")
     args = parser.parse_args(argv)
     os.environ.setdefault("DEPOT_TAIL_CACHE", "var/tail_cache")
     t0 = time.perf_counter()
-    held = {g: list(scenes(g, "heldout", args.count)) for g in ("A", "B")}
-    photos = {part: list(real_photos(part)) for part in ("report", "train")}
+    held = {g: _seen(list(scenes(g, "heldout", args.count))) for g in ("A", "B")}
+    photos = {part: _seen(list(real_photos(part))) for part in ("report", "train")}
     found = sum(len(p) for p in photos.values())
-    print(f"scenes ready in {time.perf_counter() - t0:.0f} s; real photos: {found}")
+    print(f"scenes and candidates ready in {time.perf_counter() - t0:.0f} s; real photos: {found}")
     if not found:
         print(f"  (no real photos under {real_dir()}; set DEPOT_REAL_DATA_DIR)")
     for variant in args.variant:
-        _report(variant, held, photos)
+        _report(variant, held, photos, tuple(args.models))
     return 0
 
 

@@ -10,7 +10,8 @@ import numpy as np
 from ._scene import CarGeometry, FloatImage
 
 DISTRACTORS = ("red_plate", "red_logo", "hand_wheel", "red_lamp", "red_stripe", "red_square")
-_RED = (0.78, 0.12, 0.12)
+Paint = tuple[float, float, float]
+_RED: Paint = (0.78, 0.12, 0.12)
 _WHITE = (0.88, 0.88, 0.86)
 
 
@@ -39,18 +40,20 @@ def _glyphs(img: FloatImage, x: float, y: float, w: float, h: float) -> None:
             cv2.rectangle(img, (x1 - t, int(y)), (x1, int(y + h)), _WHITE, -1)
 
 
-def _plate(rng: np.random.Generator, img: FloatImage, geo: CarGeometry, *, square: bool) -> None:
+def _plate(
+    rng: np.random.Generator, img: FloatImage, geo: CarGeometry, *, square: bool, red: Paint
+) -> None:
     cx, cy = _spot(rng, geo, low=rng.random() < 0.6)
     d = geo.width * rng.uniform(0.08, 0.12)
     pw = d * (rng.uniform(0.85, 1.15) if square else rng.uniform(1.5, 3.0))
     ph = d * (rng.uniform(0.85, 1.15) if square else rng.uniform(0.5, 1.1))
     box = cv2.boxPoints(((cx, cy), (pw, ph), rng.uniform(-12, 12))).astype(np.int32)
-    cv2.fillConvexPoly(img, box, _RED, cv2.LINE_AA)
+    cv2.fillConvexPoly(img, box, red, cv2.LINE_AA)
     if not square and rng.random() < 0.6:  # white numbers on the plate
         _glyphs(img, cx - pw * 0.35, cy - ph * 0.25, pw * 0.7, ph * 0.5)
 
 
-def _logo(rng: np.random.Generator, img: FloatImage, geo: CarGeometry) -> None:
+def _logo(rng: np.random.Generator, img: FloatImage, geo: CarGeometry, red: Paint) -> None:
     cx, cy = _spot(rng, geo, low=rng.random() < 0.4)
     s = geo.width * rng.uniform(0.1, 0.3)
     pts = np.array(
@@ -62,19 +65,19 @@ def _logo(rng: np.random.Generator, img: FloatImage, geo: CarGeometry) -> None:
         ],
         np.int32,
     )
-    cv2.fillConvexPoly(img, pts, _RED, cv2.LINE_AA)
+    cv2.fillConvexPoly(img, pts, red, cv2.LINE_AA)
     _glyphs(img, cx - s * 0.5, cy - s * 0.25, s, s * 0.5)
 
 
-def _hand_wheel(rng: np.random.Generator, img: FloatImage, geo: CarGeometry) -> None:
+def _hand_wheel(rng: np.random.Generator, img: FloatImage, geo: CarGeometry, red: Paint) -> None:
     cx, cy = _spot(rng, geo, low=rng.random() < 0.5)
     r = geo.width * rng.uniform(0.04, 0.08)
     t = max(1, int(r * 0.15))
-    cv2.circle(img, (cx, cy), int(r), _RED, t, cv2.LINE_AA)
+    cv2.circle(img, (cx, cy), int(r), red, t, cv2.LINE_AA)
     for k in range(4):
         a = math.pi * k / 4 + rng.uniform(0, 0.5)
         dx, dy = int(r * math.cos(a)), int(r * math.sin(a))
-        cv2.line(img, (cx - dx, cy - dy), (cx + dx, cy + dy), _RED, max(1, t // 2), cv2.LINE_AA)
+        cv2.line(img, (cx - dx, cy - dy), (cx + dx, cy + dy), red, max(1, t // 2), cv2.LINE_AA)
 
 
 def _lamp(rng: np.random.Generator, img: FloatImage) -> None:
@@ -85,21 +88,24 @@ def _lamp(rng: np.random.Generator, img: FloatImage) -> None:
     cv2.circle(img, (x, y), r, (1.0, 0.15, 0.12), -1, cv2.LINE_AA)
 
 
-def draw_distractor(rng: np.random.Generator, img: FloatImage, geo: CarGeometry, kind: str) -> None:
-    """Draw one red non-disc object of the given ``kind`` (see ``DISTRACTORS``)."""
+def draw_distractor(
+    rng: np.random.Generator, img: FloatImage, geo: CarGeometry, kind: str, red: Paint = _RED
+) -> None:
+    """Draw one red non-disc object of the given ``kind`` (see ``DISTRACTORS``) in the
+    paint ``red`` (RGB 0..1; the lamp is always lit signal red)."""
     if kind == "red_plate":
-        _plate(rng, img, geo, square=False)
+        _plate(rng, img, geo, square=False, red=red)
     elif kind == "red_square":
-        _plate(rng, img, geo, square=True)
+        _plate(rng, img, geo, square=True, red=red)
     elif kind == "red_logo":
-        _logo(rng, img, geo)
+        _logo(rng, img, geo, red)
     elif kind == "hand_wheel":
-        _hand_wheel(rng, img, geo)
+        _hand_wheel(rng, img, geo, red)
     elif kind == "red_lamp":
         _lamp(rng, img)
     elif kind == "red_stripe":
         y = int(geo.top + (geo.beam_top - geo.top) * rng.uniform(0.15, 0.6))
         th = max(2, int(geo.width * rng.uniform(0.03, 0.08)))
-        cv2.rectangle(img, (geo.left, y), (geo.right, y + th), _RED, -1)
+        cv2.rectangle(img, (geo.left, y), (geo.right, y + th), red, -1)
     else:
         raise ValueError(f"unknown distractor {kind!r}; use one of {DISTRACTORS}")

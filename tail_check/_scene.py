@@ -80,11 +80,17 @@ def background(
 
 
 def draw_car(
-    rng: np.random.Generator, img: FloatImage, colour: tuple[float, float, float]
+    rng: np.random.Generator,
+    img: FloatImage,
+    colour: tuple[float, float, float],
+    width: tuple[float, float] = (0.5, 0.88),
 ) -> CarGeometry:
-    """Draw the car rear (body, ribs, dirt, stencils, buffer beam, buffers, bogie)."""
+    """Draw the car rear (body, ribs, dirt, stencils, buffer beam, buffers, bogie).
+
+    ``width``: range of the car's width as a fraction of the image's (its distance).
+    """
     h, w = img.shape[:2]
-    cw = w * rng.uniform(0.5, 0.88)
+    cw = w * rng.uniform(*width)
     cx = w * 0.5 + w * rng.uniform(-0.08, 0.08)
     left, right = int(cx - cw / 2), int(cx + cw / 2)
     beam_top = int(h * rng.uniform(0.60, 0.80))

@@ -1,0 +1,67 @@
+"""Generator A's domain randomisation (:mod:`tail_check.synth_wide`) covers the scene kinds
+issue 11 lists as failures."""
+
+from __future__ import annotations
+
+import colorsys
+
+import numpy as np
+import pytest
+
+from tail_check.synth_wide import WIDE_DISTRACTORS, random_wide_snapshot
+
+N = 80
+
+
+@pytest.fixture(scope="module")
+def wide() -> list[tuple[np.ndarray, object]]:
+    return [random_wide_snapshot(np.random.default_rng([7, i])) for i in range(N)]
+
+
+def _hsv_of_box(image: np.ndarray, box: tuple[int, int, int, int]) -> tuple[float, float, float]:
+    x, y, w, h = box
+    patch = image[y + h // 4 : y + 3 * h // 4 + 1, x + w // 4 : x + 3 * w // 4 + 1]
+    b, g, r = (float(np.median(patch[..., k])) / 255 for k in range(3))
+    return colorsys.rgb_to_hsv(r, g, b)
+
+
+def test_wide_scenes_hold_the_issues_kinds(wide: list[tuple[np.ndarray, object]]) -> None:
+    labels = [lab for _, lab in wide]
+    discs = [lab for lab in labels if lab.disc]  # type: ignore[attr-defined]
+    assert 0.3 < len(discs) / N < 0.7
+    boxes = [lab.bbox for lab in discs]  # type: ignore[attr-defined]
+    assert all(b is not None for b in boxes)
+    heights = [img.shape[0] for img, lab in wide if lab.disc]  # type: ignore[attr-defined]
+    # edge-on: the visible disc at least 1.6 times as tall as wide
+    assert any(b[3] >= 1.6 * b[2] for b in boxes)
+    # small: radius about 2 % of the image height or less
+    assert any(b[3] / 2 <= 0.02 * h for b, h in zip(boxes, heights, strict=True))
+    kinds = {k for lab in labels for k in lab.distractors}  # type: ignore[attr-defined]
+    assert {"red_lettering", "red_barrier"} <= kinds <= set(WIDE_DISTRACTORS)
+    assert {lab.car_colour for lab in labels} == {"wide_red", "wide_other"}  # type: ignore[attr-defined]
+    assert any(lab.condition == "night" for lab in discs)  # type: ignore[attr-defined]
+
+
+def test_wide_discs_range_from_faded_pink_to_signal_red(
+    wide: list[tuple[np.ndarray, object]],
+) -> None:
+    day = [
+        _hsv_of_box(img, lab.bbox)  # type: ignore[attr-defined]
+        for img, lab in wide
+        if lab.disc and lab.condition == "day" and min(lab.bbox[2:]) >= 10  # type: ignore[attr-defined]
+    ]
+    sats = [s for _, s, _ in day]
+    assert len(day) >= 4
+    assert min(sats) < 0.55 and max(sats) > 0.75
+
+
+def test_wide_snapshot_is_reproducible_and_labelled_inside_the_image() -> None:
+    a, la = random_wide_snapshot(11, size=(800, 600))
+    b, lb = random_wide_snapshot(11, size=(800, 600))
+    assert np.array_equal(a, b) and la == lb
+    assert a.shape == (600, 800, 3)
+    for i in range(20):
+        img, lab = random_wide_snapshot(np.random.default_rng([3, i]))
+        if lab.bbox is not None:
+            x, y, w, h = lab.bbox
+            assert x >= 0 and y >= 0 and x + w <= img.shape[1] and y + h <= img.shape[0]
