@@ -269,13 +269,20 @@ def occluder_continues(image: NDArray[np.uint8], cut: CutDisc, at: tuple[int, in
 
 
 def surround_share(
-    band: NDArray[np.bool_], red: NDArray[np.uint8], box: tuple[int, int, int, int], level: float
+    band: NDArray[np.bool_],
+    red: NDArray[np.uint8],
+    box: tuple[int, int, int, int],
+    level: float,
+    *,
+    extra: tuple[NDArray[np.bool_], tuple[int, int]] | None = None,
 ) -> float:
     """Share of an elliptic ring (1.25-1.7 radii) around a region that is the same
     surface: inside the colour band at a similar level of the red channel.
 
     A disc is an object of its own; a disc-shaped piece cut out of a red car body by
-    ribs, stencils or shadows is surrounded by more of the same paint.
+    ribs, stencils or shadows is surrounded by more of the same paint. ``extra`` is a
+    second band of a window, ``(mask, (x, y))``, counted as if or-ed into ``band`` (only
+    the ring's part of it is combined, not a whole image per region).
     """
     x, y, w, h = box
     cx, cy, ax, ay = x + w / 2.0, y + h / 2.0, max(w / 2.0, 0.5), max(h / 2.0, 0.5)
@@ -287,5 +294,15 @@ def surround_share(
     if not ring.any():
         return 0.0
     r = red[y0:y1, x0:x1].astype(np.float32)
-    same = band[y0:y1, x0:x1] & (r >= 0.5 * level) & (r <= 2.0 * level)
+    surface = band[y0:y1, x0:x1]
+    if extra is not None:
+        local, (ex, ey) = extra
+        ox0, oy0 = max(x0, ex), max(y0, ey)
+        ox1, oy1 = min(x1, ex + local.shape[1]), min(y1, ey + local.shape[0])
+        if ox0 < ox1 and oy0 < oy1:
+            surface = surface.copy()
+            surface[oy0 - y0 : oy1 - y0, ox0 - x0 : ox1 - x0] |= local[
+                oy0 - ey : oy1 - ey, ox0 - ex : ox1 - ex
+            ]
+    same = surface & (r >= 0.5 * level) & (r <= 2.0 * level)
     return float(np.count_nonzero(same & ring)) / float(np.count_nonzero(ring))

@@ -24,6 +24,8 @@ from .shape import CUT_SOLIDITY, RegionShape, cut_members, measure_region, ramp
 __all__ = ["DiscCandidate", "disc_score", "find_candidates"]
 
 BBox = tuple[int, int, int, int]
+LocalBand = tuple[NDArray[np.bool_], tuple[int, int]]
+"""A band mask of a window and the window's top-left corner in the working image."""
 MAX_CANDIDATES = 12
 MAX_CIRCLES = 16
 """Hough circles checked for a dark rim on a body of the disc's own colour."""
@@ -91,12 +93,12 @@ def _refine(
     smooth: NDArray[np.uint8],
     valley_free: NDArray[np.bool_],
     c_delta: float,
-) -> tuple[NDArray[np.bool_], tuple[int, int], NDArray[np.bool_]] | None:
+) -> tuple[NDArray[np.bool_], tuple[int, int], LocalBand] | None:
     """Re-extract a seed with its own median colour as ``c_ref`` in a window around it.
 
     Returns the region (cropped to its box), the box origin in the working image, and
-    the local band mask of the window, or None when the region runs into the window
-    border (it is part of something larger than a disc).
+    the local band mask of the window with the window's origin, or None when the region
+    runs into the window border (it is part of something larger than a disc).
     """
     sx, sy = origin
     sh, sw = seed.shape
@@ -127,9 +129,7 @@ def _refine(
     w, h = min(local.shape[1] - x, w + 2), min(local.shape[0] - y, h + 2)
     core = (labels[y : y + h, x : x + w] == label).view(np.uint8)
     region = (cv2.dilate(core, _CROSS) & local[y : y + h, x : x + w].view(np.uint8)).astype(bool)
-    band = np.zeros(smooth.shape[:2], bool)
-    band[y0:y1, x0:x1] = local
-    return region, (x0 + x, y0 + y), band
+    return region, (x0 + x, y0 + y), (local, (x0, y0))
 
 
 def _median_colour(pixels: NDArray[np.uint8]) -> NDArray[np.float64]:
@@ -162,7 +162,10 @@ def _seeds(
     area_max = math.pi / 4 * (1.3 * dmax * work_side) ** 2
     if cv2.countNonZero(mask_u8) < area_min:  # no region can be large enough
         return []
-    n, labels = label_regions(np.asarray(cv2.erode(mask_u8, _CROSS), np.uint8))
+    eroded = np.asarray(cv2.erode(mask_u8, _CROSS), np.uint8)
+    if cv2.countNonZero(eroded) < area_min:  # the areas below are counted on it
+        return []
+    (x0, y0), n, labels = _label_crop(eroded)
     all_areas = label_areas(labels, n)
     areas = all_areas[1:]
     keep = np.nonzero((areas >= area_min) & (areas <= area_max))[0] + 1
@@ -170,18 +173,29 @@ def _seeds(
     out = []
     for label in keep:
         x, y, w, h = label_box(labels, int(label))
-        x, y = max(0, x - 1), max(0, y - 1)
+        x, y = max(0, x0 + x - 1), max(0, y0 + y - 1)
         w, h = min(mask.shape[1] - x, w + 2), min(mask.shape[0] - y, h + 2)
-        core = (labels[y : y + h, x : x + w] == label).view(np.uint8)
-        out.append(
-            (
-                (x, y, w, h),
-                (
-                    np.asarray(cv2.dilate(core, _CROSS), np.uint8) & mask_u8[y : y + h, x : x + w]
-                ).astype(bool),
-            )
-        )
+        core = (labels[y - y0 : y - y0 + h, x - x0 : x - x0 + w] == label).view(np.uint8)
+        region = np.asarray(cv2.dilate(core, _CROSS), np.uint8) & mask_u8[y : y + h, x : x + w]
+        out.append(((x, y, w, h), region.astype(bool)))
     return out
+
+
+def _label_crop(
+    mask_u8: NDArray[np.uint8],
+) -> tuple[tuple[int, int], int, NDArray[np.uint16]]:
+    """:func:`label_regions` of the mask's occupied part: its bounding box grown by one
+    pixel (room for the seeds' one-pixel margin) and started on even coordinates.
+
+    Grana's algorithm scans 2x2 blocks, so a crop on the same block grid gets the very
+    labels of the whole mask, in the same order; the labelling, the area histogram and
+    each box search then cost the occupied part only, not the whole working image.
+    """
+    bx, by, bw, bh = cv2.boundingRect(mask_u8)
+    x0, y0 = max(0, bx - 1) & ~1, max(0, by - 1) & ~1
+    x1, y1 = min(mask_u8.shape[1], bx + bw + 1), min(mask_u8.shape[0], by + bh + 1)
+    n, labels = label_regions(np.ascontiguousarray(mask_u8[y0:y1, x0:x1]))
+    return (x0, y0), n, labels
 
 
 def find_candidates(
@@ -226,7 +240,7 @@ def find_candidates(
         diameter = math.sqrt(4.0 * shape.area / math.pi) / work_side
         mean_bgr = smooth[ry : ry + rh, rx : rx + rw][region].mean(axis=0)
         surround = surround_share(
-            band | local_band, smooth[..., 2], (rx, ry, rw, rh), float(mean_bgr[2])
+            band, smooth[..., 2], (rx, ry, rw, rh), float(mean_bgr[2]), extra=local_band
         )
         bbox = (
             origin[0] + int(round(rx / scale)),
