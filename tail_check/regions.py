@@ -184,8 +184,8 @@ def _seeds(
 def _label_crop(
     mask_u8: NDArray[np.uint8],
 ) -> tuple[tuple[int, int], int, NDArray[np.uint16]]:
-    """:func:`label_regions` of the mask's occupied part: its bounding box grown by one
-    pixel (room for the seeds' one-pixel margin) and started on even coordinates.
+    """:func:`label_regions` of the mask's occupied part: its bounding box with room for
+    the seeds' margin, started on even coordinates.
 
     Grana's algorithm scans 2x2 blocks, so a crop on the same block grid gets the very
     labels of the whole mask, in the same order; the labelling, the area histogram and
@@ -193,7 +193,9 @@ def _label_crop(
     """
     bx, by, bw, bh = cv2.boundingRect(mask_u8)
     x0, y0 = max(0, bx - 1) & ~1, max(0, by - 1) & ~1
-    x1, y1 = min(mask_u8.shape[1], bx + bw + 1), min(mask_u8.shape[0], by + bh + 1)
+    # Two to the right and below: a seed on the left or top border keeps both extra
+    # columns or rows on the far side.
+    x1, y1 = min(mask_u8.shape[1], bx + bw + 2), min(mask_u8.shape[0], by + bh + 2)
     n, labels = label_regions(np.ascontiguousarray(mask_u8[y0:y1, x0:x1]))
     return (x0, y0), n, labels
 

@@ -92,6 +92,10 @@ def test_seeds_labelled_on_the_occupied_part_are_the_whole_masks() -> None:
             mask[:, : int(RNG.integers(0, w // 2))] = False
         if i % 5 == 0:  # regions on the image border
             mask[:, -3:] = True
+        if i % 7 == 0:  # a region on the left and top border, alone or the widest
+            mask[: int(RNG.integers(0, h)), int(RNG.integers(0, w)) :] = False
+            mask[:12, : int(RNG.integers(12, w))] = True
+            mask[: int(RNG.integers(12, h)), :12] = True
         got = regions._seeds(mask, p, WORK_SIDE)
         want = _seeds_of_the_whole_mask(mask, area_min, area_max)
         assert [b for b, _ in got] == [b for b, _ in want]
