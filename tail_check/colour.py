@@ -10,7 +10,7 @@ red-brown or rust cars).
 from __future__ import annotations
 
 import functools
-from typing import Literal
+from typing import Any, Literal
 
 import cv2
 import numpy as np
@@ -165,7 +165,9 @@ def _gain_tables(
     return lows, highs
 
 
-RankTables = tuple[tuple[NDArray[np.generic], ...], tuple[NDArray[np.generic], ...]]
+RankTables = tuple[
+    tuple[NDArray[np.unsignedinteger[Any]], ...], tuple[NDArray[np.unsignedinteger[Any]], ...]
+]
 
 
 @functools.lru_cache(maxsize=8)

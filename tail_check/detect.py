@@ -22,7 +22,8 @@ from numpy.typing import NDArray
 
 from .colour import band_mask
 from .profile import DEFAULT_PROFILE, CameraProfile
-from .regions import DiscCandidate, find_candidates, rim_candidates
+from .regions import DiscCandidate, find_candidates
+from .rims import rim_candidates
 from .shape import ramp
 
 __all__ = [
