@@ -131,6 +131,16 @@ def _refine(
     return region, (x0 + x, y0 + y), (local, (x0, y0))
 
 
+def masked_mean(image: NDArray[np.uint8], mask: NDArray[np.bool_]) -> NDArray[np.float64]:
+    """Per-channel mean of the masked pixels, ``image[mask].mean(axis=0)`` to the bit.
+
+    Both sum integers exactly in float64 and divide by the count once; numpy's
+    reduction over an axis of three is slow, a dot product with the mask is not."""
+    weights = mask.reshape(-1).astype(np.float64)
+    sums = weights @ image.reshape(-1, image.shape[2]).astype(np.float64)
+    return np.asarray(sums / float(np.count_nonzero(mask)), dtype=np.float64)
+
+
 def _median_colour(pixels: NDArray[np.uint8]) -> NDArray[np.float64]:
     """Per-channel median of (N, 3) pixels, as ``np.median(pixels, axis=0)`` gives it."""
     n = len(pixels)
@@ -239,7 +249,7 @@ def find_candidates(
             continue
         rh, rw = region.shape
         diameter = math.sqrt(4.0 * shape.area / math.pi) / work_side
-        mean_bgr = smooth[ry : ry + rh, rx : rx + rw][region].mean(axis=0)
+        mean_bgr = masked_mean(smooth[ry : ry + rh, rx : rx + rw], region)
         surround = surround_share(
             band, smooth[..., 2], (rx, ry, rw, rh), float(mean_bgr[2]), extra=local_band
         )

@@ -119,3 +119,14 @@ def test_surround_with_a_window_band_is_the_or_ed_band() -> None:
         level = float(RNG.uniform(10, 250))
         plain = surround_share(band | placed, red, box, level)
         assert surround_share(band, red, box, level, extra=(local, (ex, ey))) == plain
+
+
+def test_masked_mean_is_numpys_mean_of_the_masked_pixels() -> None:
+    for _ in range(500):
+        h, w = (int(v) for v in RNG.integers(1, 90, 2))
+        image = RNG.integers(0, 256, (h, w, 3), dtype=np.uint8)
+        mask = RNG.random((h, w)) > RNG.uniform(0, 0.99)
+        mask.flat[int(RNG.integers(0, h * w))] = True
+        got = regions.masked_mean(image[:, :], mask)
+        assert np.array_equal(got, image[mask].mean(axis=0))
+        assert got.dtype == np.float64
