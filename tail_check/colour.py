@@ -9,7 +9,8 @@ red-brown or rust cars).
 
 from __future__ import annotations
 
-from typing import Literal
+import functools
+from typing import Any, Literal
 
 import cv2
 import numpy as np
@@ -164,6 +165,39 @@ def _gain_tables(
     return lows, highs
 
 
+RankTables = tuple[
+    tuple[NDArray[np.unsignedinteger[Any]], ...], tuple[NDArray[np.unsignedinteger[Any]], ...]
+]
+
+
+@functools.lru_cache(maxsize=8)
+def _rank_tables(
+    ref_bgr: tuple[float, float, float], half: float, k_min: float, k_max: float
+) -> RankTables:
+    """Per channel, the lower and upper gain bound of every level as a small integer rank.
+
+    The band holds iff ``max_c L_c(x_c) <= min_d H_d(x_d)`` with ``L_c = max(k_min, lo_c)``
+    and ``H_d = min(k_max, hi_d)`` (the float path's ``k_lo <= k_hi``). Only the order of
+    the L values against the H values matters, so each bound is replaced by its position
+    among the distinct "how many L values lie at or below" counts of the H values: the
+    same comparisons, in uint8 when there are at most 256 positions (the camera bands
+    have about 190). A camera's band is the same for every snapshot: cached.
+    """
+    ref = np.array(ref_bgr, dtype=np.float32)
+    lows, highs = _gain_tables(ref, np.float32(half))
+    lo_limit, hi_limit = np.float32(k_min), np.float32(k_max)
+    lo = [np.maximum(lo_limit, t) for t in lows]
+    hi = [np.full(256, hi_limit) if t is None else np.minimum(hi_limit, t) for t in highs]
+    l_sorted = np.unique(np.concatenate(lo))
+    at_or_below = [np.searchsorted(l_sorted, t, side="right") for t in hi]
+    positions = np.unique(np.concatenate(at_or_below))
+    hi_rank = [np.searchsorted(positions, t) for t in at_or_below]
+    # L_c <= H_d iff (index of L_c among the L values) + 1 <= (L values at or below H_d).
+    lo_rank = [np.searchsorted(positions, np.searchsorted(l_sorted, t) + 1) for t in lo]
+    dtype = np.uint8 if len(positions) <= 255 else np.uint16
+    return tuple(t.astype(dtype) for t in lo_rank), tuple(t.astype(dtype) for t in hi_rank)
+
+
 def _band_mask_u8(
     img: NDArray[np.uint8],
     ref_bgr: NDArray[np.float32],
@@ -171,36 +205,17 @@ def _band_mask_u8(
     k_min: float,
     k_max: float,
 ) -> NDArray[np.bool_]:
-    """:func:`band_mask` of a uint8 image by lookup tables, with the same result.
-
-    ``max(k_min, lo_c) <= min(k_max, hi_d)`` holds iff every lower bound is below every
-    upper bound. A bound of one channel alone is a table of its level; a pair
-    ``lo_c(x_c) <= hi_d(x_d)`` is ``x_d >= T_cd[x_c]`` since ``hi_d`` grows with the
-    level, ``T_cd`` being the first level whose upper bound reaches ``lo_c(x_c)``. So the
-    band costs a few uint8 table look-ups and compares instead of float images.
-    """
-    lows, highs = _gain_tables(ref_bgr, half)
-    lo_limit, hi_limit = np.float32(k_min), np.float32(k_max)
+    """:func:`band_mask` of a uint8 image by lookup tables, with the same result: six
+    table look-ups, four min/max and one compare of small integers per pixel instead of
+    float images (see :func:`_rank_tables`)."""
+    ref_key = (float(ref_bgr[0]), float(ref_bgr[1]), float(ref_bgr[2]))
+    lo_rank, hi_rank = _rank_tables(ref_key, float(half), k_min, k_max)
     channels = cv2.split(np.ascontiguousarray(img))
-    ok = np.full(img.shape[:2], 255, np.uint8)
-    for c in range(3):
-        alone = lows[c] <= hi_limit
-        high = highs[c]
-        if high is not None:
-            alone &= (lo_limit <= high) & (lows[c] <= high)
-        thresholds = []
-        for d in range(3):
-            high_d = highs[d]
-            if d == c or high_d is None:
-                continue
-            first = np.searchsorted(high_d, lows[c], side="left")
-            alone &= first <= 255  # no level of channel d reaches this lower bound
-            thresholds.append((d, np.minimum(first, 255).astype(np.uint8)))
-        on = cv2.LUT(channels[c], alone.astype(np.uint8) * np.uint8(255))
-        ok = np.asarray(cv2.bitwise_and(ok, on), dtype=np.uint8)
-        for d, table in thresholds:
-            below = cv2.compare(cv2.LUT(channels[c], table), channels[d], cv2.CMP_LE)
-            ok = np.asarray(cv2.bitwise_and(ok, below), dtype=np.uint8)
+    lo = [cv2.LUT(channels[c], lo_rank[c]) for c in range(3)]
+    hi = [cv2.LUT(channels[c], hi_rank[c]) for c in range(3)]
+    k_lo = cv2.max(cv2.max(lo[0], lo[1]), lo[2])
+    k_hi = cv2.min(cv2.min(hi[0], hi[1]), hi[2])
+    ok = cv2.compare(k_lo, k_hi, cv2.CMP_LE)
     return np.asarray(cv2.min(ok, 1), dtype=np.uint8).view(bool)
 
 
@@ -256,13 +271,20 @@ def occluder_continues(image: NDArray[np.uint8], cut: CutDisc, at: tuple[int, in
 
 
 def surround_share(
-    band: NDArray[np.bool_], red: NDArray[np.uint8], box: tuple[int, int, int, int], level: float
+    band: NDArray[np.bool_],
+    red: NDArray[np.uint8],
+    box: tuple[int, int, int, int],
+    level: float,
+    *,
+    extra: tuple[NDArray[np.bool_], tuple[int, int]] | None = None,
 ) -> float:
     """Share of an elliptic ring (1.25-1.7 radii) around a region that is the same
     surface: inside the colour band at a similar level of the red channel.
 
     A disc is an object of its own; a disc-shaped piece cut out of a red car body by
-    ribs, stencils or shadows is surrounded by more of the same paint.
+    ribs, stencils or shadows is surrounded by more of the same paint. ``extra`` is a
+    second band of a window, ``(mask, (x, y))``, counted as if or-ed into ``band`` (only
+    the ring's part of it is combined, not a whole image per region).
     """
     x, y, w, h = box
     cx, cy, ax, ay = x + w / 2.0, y + h / 2.0, max(w / 2.0, 0.5), max(h / 2.0, 0.5)
@@ -274,5 +296,15 @@ def surround_share(
     if not ring.any():
         return 0.0
     r = red[y0:y1, x0:x1].astype(np.float32)
-    same = band[y0:y1, x0:x1] & (r >= 0.5 * level) & (r <= 2.0 * level)
+    surface = band[y0:y1, x0:x1]
+    if extra is not None:
+        local, (ex, ey) = extra
+        ox0, oy0 = max(x0, ex), max(y0, ey)
+        ox1, oy1 = min(x1, ex + local.shape[1]), min(y1, ey + local.shape[0])
+        if ox0 < ox1 and oy0 < oy1:
+            surface = surface.copy()
+            surface[oy0 - y0 : oy1 - y0, ox0 - x0 : ox1 - x0] |= local[
+                oy0 - ey : oy1 - ey, ox0 - ex : ox1 - ex
+            ]
+    same = surface & (r >= 0.5 * level) & (r <= 2.0 * level)
     return float(np.count_nonzero(same & ring)) / float(np.count_nonzero(ring))

@@ -4,7 +4,8 @@ Two passes, as in the paper's method: the camera's reference colour finds seed
 regions; then, as the paper picks ``c_ref`` inside the disc on the image itself,
 each seed's own median colour re-extracts the region around it with the same
 ``c_Δ``. A real disc then comes out whole (fog, rain and dirt shift its colour
-off the camera reference), while a piece of a red body grows into the body.
+off the camera reference), while a piece of a red body grows into the body. Discs on
+a body of their own colour are searched by their rim instead (:mod:`tail_check.rims`).
 """
 
 from __future__ import annotations
@@ -24,9 +25,9 @@ from .shape import CUT_SOLIDITY, RegionShape, cut_members, measure_region, ramp
 __all__ = ["DiscCandidate", "disc_score", "find_candidates"]
 
 BBox = tuple[int, int, int, int]
+LocalBand = tuple[NDArray[np.bool_], tuple[int, int]]
+"""A band mask of a window and the window's top-left corner in the working image."""
 MAX_CANDIDATES = 12
-MAX_CIRCLES = 16
-"""Hough circles checked for a dark rim on a body of the disc's own colour."""
 _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
 # Exposure tolerance of the second pass: the seed already fixed the exposure.
 _LOCAL_GAIN = (0.75, 1.3)
@@ -91,12 +92,12 @@ def _refine(
     smooth: NDArray[np.uint8],
     valley_free: NDArray[np.bool_],
     c_delta: float,
-) -> tuple[NDArray[np.bool_], tuple[int, int], NDArray[np.bool_]] | None:
+) -> tuple[NDArray[np.bool_], tuple[int, int], LocalBand] | None:
     """Re-extract a seed with its own median colour as ``c_ref`` in a window around it.
 
     Returns the region (cropped to its box), the box origin in the working image, and
-    the local band mask of the window, or None when the region runs into the window
-    border (it is part of something larger than a disc).
+    the local band mask of the window with the window's origin, or None when the region
+    runs into the window border (it is part of something larger than a disc).
     """
     sx, sy = origin
     sh, sw = seed.shape
@@ -127,9 +128,17 @@ def _refine(
     w, h = min(local.shape[1] - x, w + 2), min(local.shape[0] - y, h + 2)
     core = (labels[y : y + h, x : x + w] == label).view(np.uint8)
     region = (cv2.dilate(core, _CROSS) & local[y : y + h, x : x + w].view(np.uint8)).astype(bool)
-    band = np.zeros(smooth.shape[:2], bool)
-    band[y0:y1, x0:x1] = local
-    return region, (x0 + x, y0 + y), band
+    return region, (x0 + x, y0 + y), (local, (x0, y0))
+
+
+def masked_mean(image: NDArray[np.uint8], mask: NDArray[np.bool_]) -> NDArray[np.float64]:
+    """Per-channel mean of the masked pixels, ``image[mask].mean(axis=0)`` to the bit.
+
+    Both sum integers exactly in float64 and divide by the count once; numpy's
+    reduction over an axis of three is slow, a dot product with the mask is not."""
+    weights = mask.reshape(-1).astype(np.float64)
+    sums = weights @ image.reshape(-1, image.shape[2]).astype(np.float64)
+    return np.asarray(sums / float(np.count_nonzero(mask)), dtype=np.float64)
 
 
 def _median_colour(pixels: NDArray[np.uint8]) -> NDArray[np.float64]:
@@ -162,7 +171,10 @@ def _seeds(
     area_max = math.pi / 4 * (1.3 * dmax * work_side) ** 2
     if cv2.countNonZero(mask_u8) < area_min:  # no region can be large enough
         return []
-    n, labels = label_regions(np.asarray(cv2.erode(mask_u8, _CROSS), np.uint8))
+    eroded = np.asarray(cv2.erode(mask_u8, _CROSS), np.uint8)
+    if cv2.countNonZero(eroded) < area_min:  # the areas below are counted on it
+        return []
+    (x0, y0), n, labels = _label_crop(eroded)
     all_areas = label_areas(labels, n)
     areas = all_areas[1:]
     keep = np.nonzero((areas >= area_min) & (areas <= area_max))[0] + 1
@@ -170,18 +182,31 @@ def _seeds(
     out = []
     for label in keep:
         x, y, w, h = label_box(labels, int(label))
-        x, y = max(0, x - 1), max(0, y - 1)
+        x, y = max(0, x0 + x - 1), max(0, y0 + y - 1)
         w, h = min(mask.shape[1] - x, w + 2), min(mask.shape[0] - y, h + 2)
-        core = (labels[y : y + h, x : x + w] == label).view(np.uint8)
-        out.append(
-            (
-                (x, y, w, h),
-                (
-                    np.asarray(cv2.dilate(core, _CROSS), np.uint8) & mask_u8[y : y + h, x : x + w]
-                ).astype(bool),
-            )
-        )
+        core = (labels[y - y0 : y - y0 + h, x - x0 : x - x0 + w] == label).view(np.uint8)
+        region = np.asarray(cv2.dilate(core, _CROSS), np.uint8) & mask_u8[y : y + h, x : x + w]
+        out.append(((x, y, w, h), region.astype(bool)))
     return out
+
+
+def _label_crop(
+    mask_u8: NDArray[np.uint8],
+) -> tuple[tuple[int, int], int, NDArray[np.uint16]]:
+    """:func:`label_regions` of the mask's occupied part: its bounding box with room for
+    the seeds' margin, started on even coordinates.
+
+    Grana's algorithm scans 2x2 blocks, so a crop on the same block grid gets the very
+    labels of the whole mask, in the same order; the labelling, the area histogram and
+    each box search then cost the occupied part only, not the whole working image.
+    """
+    bx, by, bw, bh = cv2.boundingRect(mask_u8)
+    x0, y0 = max(0, bx - 1) & ~1, max(0, by - 1) & ~1
+    # Two to the right and below: a seed on the left or top border keeps both extra
+    # columns or rows on the far side.
+    x1, y1 = min(mask_u8.shape[1], bx + bw + 2), min(mask_u8.shape[0], by + bh + 2)
+    n, labels = label_regions(np.ascontiguousarray(mask_u8[y0:y1, x0:x1]))
+    return (x0, y0), n, labels
 
 
 def find_candidates(
@@ -224,9 +249,9 @@ def find_candidates(
             continue
         rh, rw = region.shape
         diameter = math.sqrt(4.0 * shape.area / math.pi) / work_side
-        mean_bgr = smooth[ry : ry + rh, rx : rx + rw][region].mean(axis=0)
+        mean_bgr = masked_mean(smooth[ry : ry + rh, rx : rx + rw], region)
         surround = surround_share(
-            band | local_band, smooth[..., 2], (rx, ry, rw, rh), float(mean_bgr[2])
+            band, smooth[..., 2], (rx, ry, rw, rh), float(mean_bgr[2]), extra=local_band
         )
         bbox = (
             origin[0] + int(round(rx / scale)),
@@ -277,134 +302,3 @@ def _distinct(cands: list[DiscCandidate]) -> list[DiscCandidate]:
         ):
             out.append(c)
     return out
-
-
-_ANGLES = np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)
-# Sample radii (fractions of r): inside the disc, across its rim, outside it.
-_RING_RADII = np.array([0.7, 0.8, 0.9, 0.97, 1.04, 1.11, 1.18, 1.3, 1.4])
-
-
-def _ring_profiles(
-    red: NDArray[np.float32],
-    cx: NDArray[np.float64],
-    cy: NDArray[np.float64],
-    r: NDArray[np.float64],
-) -> NDArray[np.float64]:
-    """Per circle, the share of directions in which a dark rim separates it from its
-    inside (all circles at once)."""
-    h, w = red.shape
-    radius = r[:, None, None] * _RING_RADII[None, :, None]
-    xs = np.clip(np.round(cx[:, None, None] + radius * np.cos(_ANGLES)).astype(int), 0, w - 1)
-    ys = np.clip(np.round(cy[:, None, None] + radius * np.sin(_ANGLES)).astype(int), 0, h - 1)
-    v = red[ys, xs]
-    inside = np.maximum(v[:, 0], v[:, 1])
-    rim = v[:, 2:7].min(axis=1)
-    outside = np.maximum(v[:, 7], v[:, 8])
-    dark = (rim < 0.8 * inside) & ((rim < 0.85 * outside) | (outside < 0.5 * inside))
-    return np.asarray(dark.mean(axis=1), dtype=np.float64)
-
-
-def _rim_candidate(
-    redf: NDArray[np.float32],
-    band: NDArray[np.bool_],
-    smooth: NDArray[np.uint8],
-    circle: tuple[float, float, float],
-    p: CameraProfile,
-    *,
-    origin: tuple[int, int],
-    scale: float,
-    work_side: float,
-) -> DiscCandidate:
-    """Score one Hough circle: a dark rim around it and the disc colour inside."""
-    hx, hy, hr = circle
-    # The Hough centre and radius are only good to a pixel or two; the rim test is
-    # not, so take the best of a small neighbourhood.
-    dx, dy, f = (
-        g.ravel() for g in np.meshgrid([-1.5, 0.0, 1.5], [-1.5, 0.0, 1.5], [0.92, 1.0, 1.08])
-    )
-    cxs, cys, rs = hx + dx, hy + dy, hr * f
-    rims = _ring_profiles(redf, cxs, cys, rs)
-    best = int(np.lexsort((rs, cys, cxs, rims))[-1])  # the largest, ties as max() on tuples
-    rim, cx, cy, r = float(rims[best]), float(cxs[best]), float(cys[best]), float(rs[best])
-    disc = np.zeros(band.shape, np.uint8)
-    cv2.circle(disc, (round(cx), round(cy)), max(1, round(0.85 * r)), 1, -1)
-    inside = disc > 0
-    in_band = float(np.count_nonzero(band & inside)) / max(1, int(np.count_nonzero(inside)))
-    dmin, dmax = p.disc_diameter_range
-    diameter = 2.0 * r / work_side
-    score = ramp(rim, 0.6, 0.85) * ramp(in_band, 0.7, 0.9)
-    score *= ramp(diameter, 0.7 * dmin, dmin, dmax, 1.3 * dmax)
-    side = max(1, int(round(2 * r / scale)))
-    bbox = (
-        origin[0] + int(round((cx - r) / scale)),
-        origin[1] + int(round((cy - r) / scale)),
-        side,
-        side,
-    )
-    mean_bgr = smooth[inside].mean(axis=0) if inside.any() else np.zeros(3)
-    shape = RegionShape(
-        area=math.pi * r**2,
-        fill=math.pi / 4,
-        ellipse_iou=1.0,
-        solidity=1.0,
-        aspect=1.0,
-        hole_fraction=0.0,
-        ellipse_residual=0.0,
-    )
-    return DiscCandidate(
-        bbox=bbox,
-        score=score,
-        diameter=diameter,
-        shape=shape,
-        mean_rgb=(float(mean_bgr[2]), float(mean_bgr[1]), float(mean_bgr[0])),
-        surround=1.0 - rim,
-    )
-
-
-def rim_candidates(
-    band: NDArray[np.bool_],
-    smooth: NDArray[np.uint8],
-    sharp_red: NDArray[np.uint8],
-    p: CameraProfile,
-    *,
-    origin: tuple[int, int],
-    scale: float,
-    work_side: float,
-) -> list[DiscCandidate]:
-    """Discs on a body of their own colour, found by their dark rim (circle search).
-
-    Used only where disc-coloured paint covers much of the search region (a red car):
-    there the colour regions merge, and only the disc's outline separates it.
-    ``sharp_red`` is the red channel before the full low-pass, where a thin rim
-    still shows.
-    """
-    red = smooth[..., 2]
-    dmin, dmax = p.disc_diameter_range
-    rmin, rmax = max(3, int(0.5 * dmin * work_side)), int(0.5 * dmax * work_side) + 1
-    circles = cv2.HoughCircles(
-        red,
-        cv2.HOUGH_GRADIENT,
-        dp=1,
-        minDist=float(rmin),
-        param1=60,
-        param2=18,
-        minRadius=rmin,
-        maxRadius=rmax,
-    )
-    if circles is None:
-        return []
-    redf = sharp_red.astype(np.float32)
-    found = [
-        _rim_candidate(
-            redf,
-            band,
-            smooth,
-            (float(hx), float(hy), float(hr)),
-            p,
-            origin=origin,
-            scale=scale,
-            work_side=work_side,
-        )
-        for hx, hy, hr in circles[0][:MAX_CIRCLES]
-    ]
-    return sorted(found, key=lambda c: -c.score)
