@@ -13,6 +13,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from .optical_limits import check_optical, check_rows, check_speed
 from .ranging import KMH_PER_MPS
 from .smear import speed_from_smear, speed_sigma_from_smear
 from .stripes_render import render_stripes
@@ -366,7 +367,14 @@ def speed_from_image(
     center_col: float | None = None,
 ) -> OpticalSpeed:
     """Measure the smear on ``image`` (:func:`measure_smear`) and turn it into
-    a signed speed with equation (14) and its uncertainty with (15)."""
+    a signed speed with equation (14) and its uncertainty with (15).
+
+    Inputs outside :data:`~motion.optical_limits.OPTICAL_LIMITS`, ``rows`` beyond the
+    frame, and a speed beyond any train are refused
+    (:class:`~motion.optical_limits.OpticalRangeError`)."""
+    check_optical(distance_m, pixel_fov_rad, row_time_s, pixel_error_rad)
+    if rows is not None:
+        check_rows(rows, int(np.asarray(image).shape[0]))
     m = measure_smear(image, pixel_fov_rad=pixel_fov_rad, rows=rows, center_col=center_col)
     geom = {
         "distance_m": distance_m,
@@ -376,6 +384,7 @@ def speed_from_image(
     }
     v = speed_from_smear(m.smear_px, **geom)
     sig = speed_sigma_from_smear(m.smear_px, **geom, pixel_error_rad=pixel_error_rad)
+    check_speed(v)
     fit_sig = distance_m * m.slope_sigma / row_time_s if math.isfinite(m.slope_sigma) else sig
     return OpticalSpeed(
         speed_mps=v,
