@@ -16,6 +16,7 @@ import numpy.typing as npt
 from .optical_limits import check_optical, check_rows, check_speed
 from .ranging import KMH_PER_MPS
 from .smear import speed_from_smear, speed_sigma_from_smear
+from .stripes_quality import StripeQuality, check_agreement, check_quality
 from .stripes_render import render_stripes
 
 FloatArray = npt.NDArray[np.float64]
@@ -55,23 +56,6 @@ class SmearMeasurement:
     # the column model the edges followed: "equiangular" (column ∝ θ), "rectilinear"
     # (column ∝ tan θ: every edge shifts alike in pixels), "pixels" (no β given)
     lens: str = field(default="equiangular")
-
-
-@dataclass(frozen=True)
-class StripeQuality:
-    """When a frame shows stripes at all. Measured: rendered stripes' edges (0–60 m/s, noise
-    σ 20 or none) 0.04–0.41 px rms off their lines; photos 1.4–24 px; noise ≤ 1 edge."""
-
-    max_residual_px: float = 1.0  # rms distance of the edge points from their lines, pixels
-    min_tracks: int = 3  # stripe edges that agree on the slope, at least
-
-
-def _check_quality(tracks: int, residual_px: float, quality: StripeQuality) -> None:
-    if tracks < quality.min_tracks or residual_px > quality.max_residual_px:
-        raise ValueError(
-            f"no stripes found: {tracks} edge(s) {residual_px:.1f} px rms off straight lines"
-            f" (a stripe pattern needs ≥ {quality.min_tracks}, ≤ {quality.max_residual_px} px)"
-        )
 
 
 def _grey(image: npt.NDArray[Any]) -> FloatArray:
@@ -311,12 +295,14 @@ def measure_smear(
     tracks = _follow_edges(rr, uu, pp, r1 - r0, gate)
     fit = _combine_tracks(tracks, min_track_rows)
     # The gate first, as measured: a frame refused here stays refused whatever the lens.
-    _check_quality(fit[2], fit[4] / px_scale, quality)
+    check_quality(fit[2], fit[4] / px_scale, quality)
     lens = "pixels"
     if pixel_fov_rad is not None:
         fit, lens = _lens_fit(tracks, fit, cx, pixel_fov_rad, min_track_rows, quality)
     slope, slope_sigma, n_tracks, n_points, rms = fit
     h = int(rows) if rows is not None else band_rows
+    band_px = (r1 - r0) / px_scale  # the spread of the slope over the band, in pixels
+    check_agreement(slope * band_px, slope_sigma * band_px, quality)
     if pixel_fov_rad is not None:
         smear = math.copysign(math.atan(abs(slope) * h) / pixel_fov_rad, -slope)
     else:
