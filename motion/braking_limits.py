@@ -44,6 +44,8 @@ class BrakingLimits:
     max_channels: int = 10
     # Track coordinates, as for markers.
     max_abs_coordinate_m: float = 5_000_000.0
+    # A Monte Carlo study needs two runs for a spread; a million takes minutes on 2 cores.
+    min_monte_carlo_runs: int = 2
     max_monte_carlo_runs: int = 1_000_000
 
 

@@ -147,8 +147,12 @@ def braking_error_monte_carlo(
     """
     if control not in ("deceleration", "speed"):
         raise ValueError("control must be 'deceleration' or 'speed'")
-    if runs < 2 or runs > BRAKING_LIMITS.max_monte_carlo_runs:
-        raise ValueError(f"runs must be in [2, {BRAKING_LIMITS.max_monte_carlo_runs}]")
+    lim = BRAKING_LIMITS
+    if runs < lim.min_monte_carlo_runs or runs > lim.max_monte_carlo_runs:
+        raise ValueError(
+            f"runs must be a whole number in [{lim.min_monte_carlo_runs},"
+            f" {lim.max_monte_carlo_runs}] (got {runs}): a bound needs at least two brakings"
+        )
     check_range("speed", speed_mps, 0.0, BRAKING_LIMITS.max_speed_mps, "m/s", low_open=True)
     unknown = set(params) - set(_MC_DEFAULTS)
     if unknown:

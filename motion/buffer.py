@@ -9,7 +9,7 @@ from __future__ import annotations
 import bisect
 from dataclasses import dataclass
 
-from .model import Estimate, KalmanModel, Measurement
+from .model import Estimate, KalmanModel, Measurement, MeasurementKind
 from .samples import StaleSampleError
 
 __all__ = ["TIME_TOLERANCE_S", "TRIM_PERIOD_S", "Entry", "ReplayBuffer"]
@@ -37,6 +37,10 @@ class Entry:
     real: bool
 
 
+# The kinds that carry a GNSS speed.
+_SPEEDS = frozenset({int(MeasurementKind.SPEED), int(MeasurementKind.SPEED_RESTART)})
+
+
 def _entry_time(e: Entry) -> float:
     return e.t
 
@@ -44,11 +48,15 @@ def _entry_time(e: Entry) -> float:
 class ReplayBuffer:
     """Entries in time order; predictions go through ``model``."""
 
-    __slots__ = ("model", "entries")
+    __slots__ = ("model", "entries", "_span_s")
 
-    def __init__(self, model: KalmanModel, entries: list[Entry] | None = None) -> None:
+    def __init__(
+        self, model: KalmanModel, entries: list[Entry] | None = None, span_s: float = 0.0
+    ) -> None:
         self.model = model
         self.entries: list[Entry] = entries if entries is not None else []
+        # max_delay_s: a buffer spanning less was never trimmed (its first entry is the start)
+        self._span_s = span_s
 
     def __len__(self) -> int:
         return len(self.entries)
@@ -97,6 +105,20 @@ class ReplayBuffer:
                 x = update(x, e.measurements)
         return x
 
+    def speed_before(self, j: int) -> tuple[float, float] | None:
+        """``(time, value)`` of the GNSS speed attached before the newest
+        measurement of entry ``j`` (the one just attached), in time order;
+        ``None`` when the buffer holds none."""
+        entries = self.entries
+        for i in range(j, -1, -1):
+            ms = entries[i].measurements
+            if not ms:
+                continue
+            for m in reversed(ms[:-1] if i == j else ms):
+                if m.kind in _SPEEDS:
+                    return entries[i].t, m.value
+        return None
+
     def add(self, i: int, m: Measurement) -> None:
         e = self.entries[i]
         if e.measurements is None:
@@ -133,13 +155,21 @@ class ReplayBuffer:
     def insert_real(self, t: float, accel: float) -> int:
         """An out-of-order (or repeated) sample inside the buffer; its index.
 
-        Raises :class:`StaleSampleError` when ``t`` is older than the buffer.
+        A sample before the first entry is taken as the new first entry when the
+        first entry is the filter's start (the buffer does not yet span
+        ``max_delay_s``: the caller checked the late-sample bound), so the first
+        samples of a stream arriving out of order are used too.  Raises
+        :class:`StaleSampleError` when ``t`` is older than the buffer otherwise.
         """
         entries = self.entries
         if t < entries[0].t - TIME_TOLERANCE_S:
-            raise StaleSampleError(
-                f"sample at t={t} is older than the filter's buffer (starts at t={entries[0].t})"
-            )
+            if entries[-1].t - entries[0].t > self._span_s:
+                raise StaleSampleError(
+                    f"sample at t={t} is older than the filter's buffer"
+                    f" (starts at t={entries[0].t})"
+                )
+            self._prepend(t, accel)
+            return 0
         k = self._index(t)
         e = entries[k]
         if abs(e.t - t) <= TIME_TOLERANCE_S:
@@ -151,6 +181,14 @@ class ReplayBuffer:
             return k
         self._insert(k, t, accel, True)
         return k
+
+    def _prepend(self, t: float, accel: float) -> None:
+        """A new first entry at ``t``: it takes the start's prior (the filter's
+        initial estimate, which holds for any instant) and the old first entry
+        is predicted from it; the caller re-runs from 0."""
+        first = self.entries[0]
+        self.entries.insert(0, Entry(t, accel, None, first.prior, True))
+        first.prior = self._predicted(first.prior, self.entries[0], first.t, first.accel)
 
     def trim(self, max_delay_s: float) -> None:
         """Forget entries older than ``max_delay_s`` before the newest,

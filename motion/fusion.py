@@ -89,7 +89,7 @@ from .samples import (
     check_sample,
     coerce_sample,
 )
-from .state import Snapshot
+from .state import Snapshot, export
 from .track import Marker, MarkerTable, Section
 
 __all__ = [
@@ -139,7 +139,7 @@ class TrackFilter:
         self.cfg = config or FilterConfig()
         c = self.cfg
         self._model = KalmanModel(self.table, c)
-        self._buf = ReplayBuffer(self._model)
+        self._buf = ReplayBuffer(self._model, span_s=c.max_delay_s)
         self._post: Estimate | None = None
         self._reader = MarkerReader(self.table, c.reader_margin_m, c.missed_zone_m)
         self._policy = GnssPolicy(c)
@@ -233,14 +233,12 @@ class TrackFilter:
         return (s0, c.initial_speed_mps, 0.0, ps, 0.0, 0.0, speed_var, 0.0, bias_var)
 
     def _starts_again_at(self, t: float) -> bool:
-        """Whether the sample at ``t`` starts the filter again: it lies more than
-        ``max_gap_s`` after the newest sample (nothing can be integrated across
-        that), or it confirms an on-board restart; :meth:`RestartWatch.check`
-        refuses an old sample that does not (a late old batch must not wipe a
-        good estimate)."""
+        """Whether the sample at ``t`` starts the filter again: it confirms a
+        forward clock jump beyond ``max_gap_s`` (nothing can be integrated across
+        that) or an on-board restart; :meth:`RestartWatch.check` refuses a sample
+        of a run not yet confirmed, and one later than the late-sample bound (one
+        corrupt time stamp, a late old batch, must not wipe a good estimate)."""
         entries = self._buf.entries
-        if t - entries[-1].t > self.cfg.max_gap_s:
-            return True
         return self._restart.check(t, entries[0].t, entries[-1].t)
 
     def _start_again(self) -> None:
@@ -299,11 +297,21 @@ class TrackFilter:
         m = e.measurements[-1]
         x = self._model.update(e.prior, e.measurements[:-1])
         self._direction.gnss_speed(x, m.value, m.variance)
+        policy = self._policy
         if not self._model.speed_rejected(x, m.value, m.variance):
             self.gnss_rejects = 0
+            policy.disagrees = False
             return
+        if policy.impossible_jump(buf.speed_before(j), e.t, m.value):
+            policy.disagrees = True
+        limit = self.cfg.gnss_reject_limit
         self.gnss_rejects += 1
-        if self.gnss_rejects < self.cfg.gnss_reject_limit:
+        if self.gnss_rejects < limit:
+            return
+        if policy.disagrees:
+            # Following GNSS would be a braking no brake gives: the accelerometer's speed
+            # stays, its σ growing as dead reckoning's (the readings are not applied).
+            self.gnss_rejects = limit
             return
         self.gnss_rejects = 0
         e.measurements[-1] = Measurement(MeasurementKind.SPEED_RESTART, m.value, m.variance)
@@ -368,26 +376,14 @@ class TrackFilter:
             # An unknown position names no section: the placeholder coordinate is nowhere.
             section=self.table.section_at(s) if known else None,
             gnss_age_s=None if last_gnss_t is None else e.t - last_gnss_t,
+            gnss_disagrees=self._policy.disagrees,
         )
 
-    # -- persistence -------------------------------------------------------------
+    # -- persistence (the document and its parts: motion.state) ------------------
     def to_dict(self) -> dict[str, Any]:
         """A JSON-safe snapshot (:mod:`motion.state`); restore with
         :meth:`from_dict` and the same table."""
-        return Snapshot(
-            table_fingerprint=self.table.fingerprint,
-            config=self.cfg,
-            entries=self._buf.entries,
-            post=self._post,
-            reader=self._reader.to_dict(),
-            last_fix_t=self._policy.last_fix_t,
-            last_gnss_t=self._policy.last_gnss_t,
-            stale_measurements=self.stale_measurements,
-            unknown_markers=self.unknown_markers,
-            gnss_rejects=self.gnss_rejects,
-            restart=self._restart.to_json(),
-            direction=self._direction.to_json(),
-        ).to_json()
+        return export(self)
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], table: MarkerTable | None = None) -> TrackFilter:
@@ -395,16 +391,7 @@ class TrackFilter:
         tb = table if table is not None else MarkerTable([])
         snap = Snapshot.from_json(d, tb.fingerprint)
         f = cls(tb, snap.config)
-        f._buf.entries = snap.entries
-        f._post = snap.post
-        f._reader.restore(snap.reader)
-        f._policy.last_fix_t = snap.last_fix_t
-        f._policy.last_gnss_t = snap.last_gnss_t
-        f.stale_measurements = snap.stale_measurements
-        f.unknown_markers = snap.unknown_markers
-        f.gnss_rejects = snap.gnss_rejects
-        f._restart.restore(snap.restart)
-        f._direction.restore(snap.direction)
+        snap.restore_into(f)
         if f._buf.entries:
             f._state = f._make_state()
         return f

@@ -39,6 +39,7 @@ Table 1 notes
 
 from __future__ import annotations
 
+from .optical_limits import OPTICAL_LIMITS, OpticalLimits, OpticalRangeError
 from .ranging import (
     KMH_PER_MPS,
     PAPER_TABLE1,
@@ -79,6 +80,9 @@ from .stripes import (
 
 __all__ = [
     "KMH_PER_MPS",
+    "OPTICAL_LIMITS",
+    "OpticalLimits",
+    "OpticalRangeError",
     "PAPER_TABLE1",
     "PAPER_EXAMPLE",
     "OpticalSpeed",

@@ -2,6 +2,13 @@
 
 * GNSS speed — always (it arrives ``delay`` late and is applied at its own
   time); the Kalman update itself gates outliers (``FilterConfig.gnss_gate``).
+  A run of rejected speeds starts the speed again from GNSS (the estimate was
+  wrong) — unless the run began with a jump no brake gives: from the GNSS speed
+  before it, faster than ``BRAKING_LIMITS.max_deceleration_mps2`` (plus the
+  gate's noise allowance).  A lost or frozen fix in a tunnel reads 0 while the
+  train runs on (found by the independent trial: the filter followed it to a
+  standstill): then the accelerometer's speed stays, and the state says GNSS
+  ``disagrees`` until a GNSS speed passes the gate again.
 * GNSS geographic fix — only where the markers cannot help (seed ``004``:
   "a marker that is not read: in its expected zone, convert the GNSS
   geographic fix to a track coordinate and correct with it"), or to find a
@@ -13,6 +20,7 @@ from __future__ import annotations
 
 import math
 
+from .braking_limits import BRAKING_LIMITS
 from .samples import FilterConfig
 
 __all__ = ["GnssPolicy"]
@@ -26,12 +34,26 @@ class GnssPolicy:
     speed (``None`` before the first).
     """
 
-    __slots__ = ("cfg", "last_fix_t", "last_gnss_t")
+    __slots__ = ("cfg", "last_fix_t", "last_gnss_t", "disagrees", "_jump_noise")
 
     def __init__(self, cfg: FilterConfig) -> None:
         self.cfg = cfg
         self.last_fix_t = -math.inf
         self.last_gnss_t: float | None = None
+        # GNSS speeds jumped beyond any brake and are being rejected (see the module).
+        self.disagrees = False
+        # Two readings' noise within the gate: the part of a jump that is not motion.
+        self._jump_noise = cfg.gnss_gate * math.sqrt(2.0) * cfg.gnss_speed_sigma
+
+    def impossible_jump(self, before: tuple[float, float] | None, tau: float, z: float) -> bool:
+        """Whether GNSS speed ``z`` at ``tau`` lies beyond what any brake (or drive)
+        reaches from the GNSS speed ``before`` (``(time, value)``; ``None``: no
+        reading to compare with, nothing shown impossible)."""
+        if before is None:
+            return False
+        tau0, z0 = before
+        reach = BRAKING_LIMITS.max_deceleration_mps2 * abs(tau - tau0) + self._jump_noise
+        return abs(z - z0) > reach
 
     def speed_used(self, tau: float) -> None:
         """A GNSS speed measured at ``tau`` was attached to the buffer."""

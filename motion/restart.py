@@ -11,6 +11,12 @@ themselves (each after the previous, by at most ``max_gap_s``), as a rebooted
 clock does; one live sample in between, or one going back, and the run
 starts over.  The samples of the run before the last are refused
 (:class:`~motion.samples.StaleSampleError`): a restart costs them.
+
+A clock that jumps *forward* by more than ``max_gap_s`` is confirmed the same way
+(found by the independent trial: one corrupt time stamp far ahead wiped the
+estimate at once, and the live samples after it were then "old"); the samples of
+the run before the last are refused with :class:`~motion.samples.ClockJumpError`.
+A sample behind the newest by at most ``max_delay_s`` is a late sample and used.
 """
 
 from __future__ import annotations
@@ -18,7 +24,7 @@ from __future__ import annotations
 from typing import Any
 
 from .buffer import TIME_TOLERANCE_S
-from .samples import FilterConfig, StaleSampleError
+from .samples import ClockJumpError, FilterConfig, StaleSampleError
 
 __all__ = ["RestartWatch"]
 
@@ -35,22 +41,41 @@ class RestartWatch:
 
     def check(self, t: float, oldest_t: float, newest_t: float) -> bool:
         """Whether the sample at ``t`` (the buffer spanning ``oldest_t`` to
-        ``newest_t``) confirms a restart; raises :class:`StaleSampleError` for an
-        old sample that does not, counting it when it is far behind."""
-        if t >= oldest_t - TIME_TOLERANCE_S:
-            self.clear()  # inside the buffer or newer: the stream goes on
+        ``newest_t``) confirms a restart or a forward jump; raises
+        :class:`StaleSampleError` for a late sample beyond the bound, and
+        :class:`ClockJumpError` or :class:`StaleSampleError` for one of a run that
+        is not confirmed yet (counting it)."""
+        cfg = self.cfg
+        if t - newest_t > cfg.max_gap_s:
+            return self._run(t, newest_t, "ahead of")
+        if t >= oldest_t - TIME_TOLERANCE_S or newest_t - t <= cfg.max_delay_s:
+            self.clear()  # inside the buffer, within the late-sample bound, or newer
             return False
         if not self.far_behind(t, newest_t):
             self.clear()
             raise StaleSampleError(
-                f"sample at t={t} is older than the filter's buffer (starts at t={oldest_t})"
+                f"sample at t={t} is {newest_t - t:.6g} s behind the newest (t={newest_t}):"
+                f" later than max_delay_s = {cfg.max_delay_s:g} s, the bound within which"
+                " late samples are used; it is refused (send samples in time order, or"
+                " within that bound)"
             )
+        return self._run(t, newest_t, "behind")
+
+    def _run(self, t: float, newest_t: float, where: str) -> bool:
+        """Count ``t`` in the run of far-off samples; whether it confirms the run."""
         if self.confirmed(t):
             return True
-        raise StaleSampleError(
-            f"sample at t={t} is far older than the filter's buffer (newest t={newest_t}):"
-            f" refused; {self.cfg.restart_confirm_samples - self.count} more in a row"
-            " would be taken as an on-board restart"
+        more = self.cfg.restart_confirm_samples - self.count
+        if where == "behind":
+            raise StaleSampleError(
+                f"sample at t={t} is far older than the filter's buffer (newest t={newest_t}):"
+                f" refused; {more} more in a row would be taken as an on-board restart"
+            )
+        raise ClockJumpError(
+            f"sample at t={t} is {t - newest_t:.6g} s ahead of the newest (t={newest_t}),"
+            f" beyond max_gap_s = {self.cfg.max_gap_s:g} s: refused, the estimate kept;"
+            f" {more} more in a row, running forward, would be taken as a clock jump"
+            " (the train then starts again unknown)"
         )
 
     def far_behind(self, t: float, newest_t: float) -> bool:

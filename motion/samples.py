@@ -17,6 +17,7 @@ __all__ = [
     "MotionSample",
     "SampleLimits",
     "SampleRuleError",
+    "ClockJumpError",
     "StaleSampleError",
     "TrackState",
     "check_sample",
@@ -26,7 +27,13 @@ __all__ = [
 
 
 class StaleSampleError(ValueError):
-    """The sample is older than the filter's buffer; it cannot be used."""
+    """The sample is refused, the estimate kept: later than the late-sample bound
+    (``FilterConfig.max_delay_s``), or one of a run that is not yet confirmed."""
+
+
+class ClockJumpError(StaleSampleError):
+    """The sample lies far ahead of the newest (``FilterConfig.max_gap_s``): one of a
+    forward clock jump that ``restart_confirm_samples`` samples in a row must confirm."""
 
 
 class SampleRuleError(ValueError):
@@ -165,6 +172,10 @@ class TrackState:
     missed_marker_ids: tuple[str, ...]
     section: str | None
     gnss_age_s: float | None  # time since the newest GNSS speed was measured
+    # GNSS speeds jumped by more than any brake gives (a lost fix reads 0) and the gate
+    # refuses them: the speed is the accelerometer's alone (motion.policy).  In
+    # ``as_dict`` only while true, so states of a filter that never saw it keep their form.
+    gnss_disagrees: bool = False
 
     @property
     def speed_kmh(self) -> float:
@@ -173,6 +184,8 @@ class TrackState:
     def as_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["missed_marker_ids"] = list(self.missed_marker_ids)
+        if not self.gnss_disagrees:
+            del d["gnss_disagrees"]
         return d
 
 
@@ -197,7 +210,10 @@ class FilterConfig:
     gnss_position_sigma: float = 12.0  # one fix projected on the track, m
     gnss_fix_interval_s: float = 5.0  # at most one fix per interval
     marker_sigma: float = 0.5  # m
-    max_delay_s: float = 5.0  # buffer length: the largest GNSS delay handled
+    # The buffer length: the largest GNSS delay handled, and the late-sample bound: a
+    # sample up to this much behind the newest is used (inserted and the filter re-run),
+    # an older one refused with the reason (StaleSampleError).
+    max_delay_s: float = 5.0
     reader_margin_m: float = 30.0
     missed_zone_m: float = 400.0
     initial_position_m: float | None = None  # None: unknown until a marker or fix
@@ -228,9 +244,11 @@ class FilterConfig:
     gnss_reject_limit: int = 5
     # The σ of speed given to a speed that starts again (unknown).
     unknown_speed_sigma: float = 100.0
-    # The largest gap between samples the filter integrates across, s.  A sample
-    # further after the newest (the unit was off, or its clock jumped) starts the
-    # filter again from that sample with position and speed unknown.
+    # The largest gap between samples the filter integrates across, s.  Samples
+    # further after the newest (the unit was off, or its clock jumped) start the filter
+    # again with position and speed unknown once restart_confirm_samples of them in a
+    # row confirm the jump; fewer are refused (ClockJumpError), the estimate kept: one
+    # corrupt time stamp must not wipe a good estimate.
     max_gap_s: float = 30.0
     # An on-board restart (motion.restart): this many samples in a row more than
     # restart_jump_s behind the newest, running forward among themselves, start the

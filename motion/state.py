@@ -18,7 +18,8 @@ during an upgrade).  The document, a few kB::
      "gnss_rejects": n,          # only when n > 0 (added after version 1)
      "restart": [t, n],          # only during a run of far-behind samples (motion.restart)
      "direction": {"assumed": b, "anchor": [s, var] | null,
-                   "last_fix": [s, var] | null}}  # only while not settled
+                   "last_fix": [s, var] | null},  # only while not settled
+     "gnss_disagrees": true}     # only while GNSS jumped beyond any brake (motion.policy)
 
 ``gnss_rejects`` counts the GNSS speeds rejected in a row by the gate; it is
 written only while non-zero, so a healthy filter keeps the version-1 form and
@@ -40,13 +41,18 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, Protocol
 
-from .buffer import Entry
+from .buffer import Entry, ReplayBuffer
+from .direction import DirectionWatch
+from .marker_reader import MarkerReader
 from .model import Estimate, Measurement, estimate
+from .policy import GnssPolicy
+from .restart import RestartWatch
 from .samples import FilterConfig
+from .track import MarkerTable
 
-__all__ = ["SNAPSHOT_VERSION", "Snapshot"]
+__all__ = ["SNAPSHOT_VERSION", "FilterParts", "Snapshot", "export"]
 
 SNAPSHOT_VERSION = 1
 # FilterConfig fields added after version 1: written only when not at their default.
@@ -99,6 +105,7 @@ class Snapshot:
     gnss_rejects: int = 0
     restart: list[Any] | None = None  # motion.restart.RestartWatch, during a run
     direction: dict[str, Any] | None = None  # motion.direction.DirectionWatch, while assumed
+    gnss_disagrees: bool = False  # motion.policy.GnssPolicy.disagrees
 
     def to_json(self) -> dict[str, Any]:
         """The JSON-safe document (key order fixed: it is compared byte for byte)."""
@@ -119,6 +126,8 @@ class Snapshot:
             doc["restart"] = self.restart
         if self.direction is not None:
             doc["direction"] = self.direction
+        if self.gnss_disagrees:
+            doc["gnss_disagrees"] = True
         return doc
 
     @classmethod
@@ -146,4 +155,54 @@ class Snapshot:
             gnss_rejects=int(d.get("gnss_rejects", 0)),
             restart=d.get("restart"),
             direction=d.get("direction"),
+            gnss_disagrees=bool(d.get("gnss_disagrees", False)),
         )
+
+    def restore_into(self, f: FilterParts) -> None:
+        """Put this snapshot into a new filter made with its table and config."""
+        f._buf.entries = self.entries
+        f._post = self.post
+        f._reader.restore(self.reader)
+        f._policy.last_fix_t = self.last_fix_t
+        f._policy.last_gnss_t = self.last_gnss_t
+        f._policy.disagrees = self.gnss_disagrees
+        f.stale_measurements = self.stale_measurements
+        f.unknown_markers = self.unknown_markers
+        f.gnss_rejects = self.gnss_rejects
+        f._restart.restore(self.restart)
+        f._direction.restore(self.direction)
+
+
+class FilterParts(Protocol):
+    """What a snapshot holds of a :class:`motion.fusion.TrackFilter` (its own parts)."""
+
+    table: MarkerTable
+    cfg: FilterConfig
+    _buf: ReplayBuffer
+    _post: Estimate | None
+    _reader: MarkerReader
+    _policy: GnssPolicy
+    _restart: RestartWatch
+    _direction: DirectionWatch
+    stale_measurements: int
+    unknown_markers: int
+    gnss_rejects: int
+
+
+def export(f: FilterParts) -> dict[str, Any]:
+    """The JSON-safe snapshot document of filter ``f``."""
+    return Snapshot(
+        table_fingerprint=f.table.fingerprint,
+        config=f.cfg,
+        entries=f._buf.entries,
+        post=f._post,
+        reader=f._reader.to_dict(),
+        last_fix_t=f._policy.last_fix_t,
+        last_gnss_t=f._policy.last_gnss_t,
+        stale_measurements=f.stale_measurements,
+        unknown_markers=f.unknown_markers,
+        gnss_rejects=f.gnss_rejects,
+        restart=f._restart.to_json(),
+        direction=f._direction.to_json(),
+        gnss_disagrees=f._policy.disagrees,
+    ).to_json()

@@ -13,8 +13,10 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from .optical_limits import check_optical, check_rows, check_speed
 from .ranging import KMH_PER_MPS
 from .smear import speed_from_smear, speed_sigma_from_smear
+from .stripes_quality import StripeQuality, check_agreement, check_quality
 from .stripes_render import render_stripes
 
 FloatArray = npt.NDArray[np.float64]
@@ -54,23 +56,6 @@ class SmearMeasurement:
     # the column model the edges followed: "equiangular" (column ∝ θ), "rectilinear"
     # (column ∝ tan θ: every edge shifts alike in pixels), "pixels" (no β given)
     lens: str = field(default="equiangular")
-
-
-@dataclass(frozen=True)
-class StripeQuality:
-    """When a frame shows stripes at all. Measured: rendered stripes' edges (0–60 m/s, noise
-    σ 20 or none) 0.04–0.41 px rms off their lines; photos 1.4–24 px; noise ≤ 1 edge."""
-
-    max_residual_px: float = 1.0  # rms distance of the edge points from their lines, pixels
-    min_tracks: int = 3  # stripe edges that agree on the slope, at least
-
-
-def _check_quality(tracks: int, residual_px: float, quality: StripeQuality) -> None:
-    if tracks < quality.min_tracks or residual_px > quality.max_residual_px:
-        raise ValueError(
-            f"no stripes found: {tracks} edge(s) {residual_px:.1f} px rms off straight lines"
-            f" (a stripe pattern needs ≥ {quality.min_tracks}, ≤ {quality.max_residual_px} px)"
-        )
 
 
 def _grey(image: npt.NDArray[Any]) -> FloatArray:
@@ -310,12 +295,14 @@ def measure_smear(
     tracks = _follow_edges(rr, uu, pp, r1 - r0, gate)
     fit = _combine_tracks(tracks, min_track_rows)
     # The gate first, as measured: a frame refused here stays refused whatever the lens.
-    _check_quality(fit[2], fit[4] / px_scale, quality)
+    check_quality(fit[2], fit[4] / px_scale, quality)
     lens = "pixels"
     if pixel_fov_rad is not None:
         fit, lens = _lens_fit(tracks, fit, cx, pixel_fov_rad, min_track_rows, quality)
     slope, slope_sigma, n_tracks, n_points, rms = fit
     h = int(rows) if rows is not None else band_rows
+    band_px = (r1 - r0) / px_scale  # the spread of the slope over the band, in pixels
+    check_agreement(slope * band_px, slope_sigma * band_px, quality)
     if pixel_fov_rad is not None:
         smear = math.copysign(math.atan(abs(slope) * h) / pixel_fov_rad, -slope)
     else:
@@ -366,7 +353,14 @@ def speed_from_image(
     center_col: float | None = None,
 ) -> OpticalSpeed:
     """Measure the smear on ``image`` (:func:`measure_smear`) and turn it into
-    a signed speed with equation (14) and its uncertainty with (15)."""
+    a signed speed with equation (14) and its uncertainty with (15).
+
+    Inputs outside :data:`~motion.optical_limits.OPTICAL_LIMITS`, ``rows`` beyond the
+    frame, and a speed beyond any train are refused
+    (:class:`~motion.optical_limits.OpticalRangeError`)."""
+    check_optical(distance_m, pixel_fov_rad, row_time_s, pixel_error_rad)
+    if rows is not None:
+        check_rows(rows, int(np.asarray(image).shape[0]))
     m = measure_smear(image, pixel_fov_rad=pixel_fov_rad, rows=rows, center_col=center_col)
     geom = {
         "distance_m": distance_m,
@@ -376,6 +370,7 @@ def speed_from_image(
     }
     v = speed_from_smear(m.smear_px, **geom)
     sig = speed_sigma_from_smear(m.smear_px, **geom, pixel_error_rad=pixel_error_rad)
+    check_speed(v)
     fit_sig = distance_m * m.slope_sigma / row_time_s if math.isfinite(m.slope_sigma) else sig
     return OpticalSpeed(
         speed_mps=v,

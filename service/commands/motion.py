@@ -42,7 +42,7 @@ from pydantic import ValidationError
 from core.errors import Unprocessable
 from motion import braking, optical
 from service.commands._braking_parsers import add_braking_parsers
-from service.commands._common import COUNT, POSITIVE, DepotParser, fail
+from service.commands._common import COUNT, DepotParser, fail, number
 from service.commands._motion_reports import render_histogram_png, tables
 from service.trains import braking as braking_api
 
@@ -69,6 +69,22 @@ def _clean(obj: Any) -> Any:
 
 
 # ------------------------------------------------------------------ optical-speed
+# The options of the quantities motion.optical_limits names in a refusal.
+_OPTION = {
+    "distance_m": "--distance",
+    "pixel_fov_rad": "--pixel-fov",
+    "row_time_s": "--row-time",
+    "pixel_error_rad": "--pixel-error",
+    "rows": "--rows",
+    "speed": "--distance, --row-time or --pixel-fov",
+}
+# The ranges of motion.optical_limits (speed_from_image checks them too).
+_OPT = optical.OPTICAL_LIMITS
+DISTANCE = number(low=0, low_open=True, high=_OPT.max_distance_m)
+PIXEL_ANGLE = number(low=_OPT.min_pixel_fov_rad, high=_OPT.max_pixel_fov_rad)
+ROW_TIME = number(low=_OPT.min_row_time_s, high=_OPT.max_row_time_s)
+
+
 def _cmd_optical_speed(args: argparse.Namespace) -> int:
     import cv2
 
@@ -87,6 +103,8 @@ def _cmd_optical_speed(args: argparse.Namespace) -> int:
             rows=args.rows,
             pixel_error_rad=args.pixel_error,
         )
+    except optical.OpticalRangeError as e:
+        return fail(f"{_OPTION.get(e.field, e.field)}: {e}")
     except ValueError as e:
         return fail(f"{e} (the image must show bright vertical stripes; check --pixel-fov)")
     if args.json:
@@ -297,20 +315,28 @@ def register(sub: Any) -> None:
     )
     p.add_argument("image", metavar="IMAGE", help="the frame: JPEG or PNG, rows read top to bottom")
     p.add_argument(
-        "--distance", type=POSITIVE, required=True, metavar="M", help="distance to the stripes, m"
+        "--distance", type=DISTANCE, required=True, metavar="M", help="distance to the stripes, m"
     )
     p.add_argument(
-        "--pixel-fov", type=POSITIVE, required=True, metavar="RAD", help="angle of one pixel β, rad"
+        "--pixel-fov",
+        type=PIXEL_ANGLE,
+        required=True,
+        metavar="RAD",
+        help="angle of one pixel β, rad",
     )
     p.add_argument(
-        "--row-time", type=POSITIVE, required=True, metavar="S", help="row read-out time t_c, s"
+        "--row-time", type=ROW_TIME, required=True, metavar="S", help="row read-out time t_c, s"
     )
     p.add_argument(
-        "--rows", type=COUNT, default=None, metavar="N", help="rows h (default: the stripe height)"
+        "--rows",
+        type=COUNT,
+        default=None,
+        metavar="N",
+        help="rows h, at most the frame's height (default: the stripe band's height)",
     )
     p.add_argument(
         "--pixel-error",
-        type=POSITIVE,
+        type=PIXEL_ANGLE,
         default=None,
         metavar="RAD",
         help="pixel discreteness Δω, rad (default: β/2)",

@@ -17,9 +17,12 @@ def sample_of(event: MotionSample) -> dict[str, Any]:
 
 def motion_sample(d: Derivation) -> dict[str, Any]:
     try:
-        state = service.feed(d.session, d.event.train, sample_of(d.event), d.event.occurred_at)
+        state = service.feed(
+            d.session, d.event.train, sample_of(d.event), d.event.occurred_at, d.device.id
+        )
     except StaleSampleError as exc:
-        # Older than the filter's buffer: the event is kept and the device told, not applied.
+        # Later than the late-sample bound, or one of an unconfirmed clock jump or restart:
+        # the event is kept and the device told why, not applied.
         # (Any other ValueError would be a sample the schema let through against the rules
         # in motion.samples: it is a fault, recorded as a derive_error, not a warning.)
         return {"position": None, "warning": str(exc)}

@@ -7,6 +7,24 @@ from pydantic import BaseModel, ConfigDict, Field
 from core.schemas import Instant
 
 
+class UnitEstimateOut(BaseModel):
+    """One on-board unit's own estimate of the train (each unit has its own filter)."""
+
+    model_config = ConfigDict(extra="allow")
+
+    device: str
+    updated_at: Instant = Field(description="device time of the unit's newest sample applied")
+    t: float = Field(description="the unit's own on-board clock of that sample, s")
+    position_m: float
+    speed_mps: float
+    direction: int
+    sigma_position_m: float
+    sigma_speed_mps: float
+    position_known: bool = Field(description="false also when the unit is stale")
+    section: str | None
+    stale: bool = Field(description="no sample from this unit for longer than DEPOT_HEARTBEAT_S")
+
+
 class TrainPositionOut(BaseModel):
     # The filter reports more diagnostics than documented here; they pass through.
     model_config = ConfigDict(extra="allow")
@@ -47,4 +65,16 @@ class TrainPositionOut(BaseModel):
     missed_marker_ids: list[str]
     section: str | None = Field(
         description="the section the train is in; null while the position is not known"
+    )
+    gnss_disagrees: bool = Field(
+        description="GNSS speeds jumped by more than any brake gives (a fix lost in a tunnel"
+        " reads 0) and are not used: the speed is the accelerometer's, its σ that of dead"
+        " reckoning"
+    )
+    device: str | None = Field(
+        description="the on-board unit whose estimate this is (the one that reported last)"
+    )
+    devices: list[UnitEstimateOut] = Field(
+        description="every on-board unit of the train with its own estimate: units run their"
+        " own clocks and filters, so a second unit never resets the first"
     )

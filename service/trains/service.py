@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from datetime import datetime
 from typing import Any
 
 from sqlalchemy import select
@@ -41,39 +42,91 @@ def add_marker(session: Session, data: MarkerIn) -> TrackMarker:
     return marker
 
 
-def feed(session: Session, train: str, sample: dict[str, Any], at: Any) -> dict[str, Any]:
-    """Advance the train's filter by one ``motion_sample``; returns the new state."""
-    # Create the train's row race-free (two units may start the same train), then lock it.
+# The filter_state document: one snapshot per on-board unit.  A row written before units
+# were kept apart holds one bare snapshot (it has "version"): the first unit to report
+# after the upgrade continues it.
+_DEVICES = "devices"
+# What the train's answer shows of each unit's own estimate.
+_UNIT_KEYS = (
+    "t",
+    "position_m",
+    "speed_mps",
+    "direction",
+    "sigma_position_m",
+    "sigma_speed_mps",
+    "position_known",
+    "section",
+)
+
+
+def _unit_snapshots(filter_state: dict[str, Any], device: str) -> dict[str, Any]:
+    if not filter_state:
+        return {}
+    if _DEVICES not in filter_state:
+        return {device: filter_state}
+    units: dict[str, Any] = filter_state[_DEVICES]
+    return units
+
+
+def _unit_filter(table: MarkerTable, snapshot: dict[str, Any] | None) -> TrackFilter:
+    if not snapshot:
+        return TrackFilter(table, FilterConfig())
+    try:
+        return TrackFilter.from_dict(snapshot, table)
+    except ValueError:
+        # The marker table changed since the filter started: start again from it.
+        return TrackFilter(table, FilterConfig())
+
+
+def _locked_row(session: Session, train: str, at: Any) -> TrainPosition:
+    """The train's row, created race-free (two units may start the same train), locked."""
     module = postgresql if session.get_bind().dialect.name == "postgresql" else sqlite
     session.execute(
         module.insert(TrainPosition)
         .values(train=train, updated_at=at, state={}, filter_state={})
         .on_conflict_do_nothing(index_elements=["train"])
     )
-    row = session.scalars(
+    return session.scalars(
         select(TrainPosition)
         .where(TrainPosition.train == train)
         .with_for_update()
         .execution_options(populate_existing=True)
     ).one()
-    table = marker_table(session)
-    if not row.filter_state:
-        track_filter = TrackFilter(table, FilterConfig())
-    else:
-        try:
-            track_filter = TrackFilter.from_dict(row.filter_state, table)
-        except ValueError:
-            # The marker table changed since the filter started: start again from it.
-            track_filter = TrackFilter(table, FilterConfig())
+
+
+def feed(
+    session: Session, train: str, sample: dict[str, Any], at: Any, device: str = ""
+) -> dict[str, Any]:
+    """Advance the filter of the train's unit ``device`` by one ``motion_sample``; returns
+    the unit's new state.
+
+    Every on-board unit of a train has its own filter: two units (one in each cab, a
+    replacement fitted) run their own clocks, and one filter fed both took each unit's
+    samples as a clock jump or a restart of the other and wiped the train's estimate
+    (found by the independent trial).  The train's state is that of the unit that
+    reported last, with every unit's own estimate under ``devices``.
+    """
+    row = _locked_row(session, train, at)
+    units = dict(_unit_snapshots(row.filter_state, device))
+    track_filter = _unit_filter(marker_table(session), units.get(device))
     try:
         state = track_filter.update(sample).as_dict()
     except StaleSampleError:
-        # Refused, but counted towards an on-board restart (motion.restart): the
-        # count must reach the next sample, whichever worker takes it.
-        row.filter_state = track_filter.to_dict()
+        # Refused, but counted towards an on-board restart or a clock jump (motion.restart):
+        # the count must reach the next sample, whichever worker takes it.
+        units[device] = track_filter.to_dict()
+        row.filter_state = {_DEVICES: units}
         session.flush()
         raise
-    row.updated_at, row.state, row.filter_state = at, state, track_filter.to_dict()
+    units[device] = track_filter.to_dict()
+    seen = {u["device"]: u for u in row.state.get(_DEVICES, [])}
+    seen[device] = {
+        "device": device,
+        "updated_at": at.isoformat(),
+        **{k: state.get(k) for k in _UNIT_KEYS},
+    }
+    row.updated_at, row.filter_state = at, {_DEVICES: units}
+    row.state = {**state, "device": device, _DEVICES: [seen[k] for k in sorted(seen)]}
     session.flush()
     return state
 
@@ -88,6 +141,10 @@ def position(session: Session, train: str) -> dict[str, Any]:
     answer = {
         "train": train,
         "updated_at": row.updated_at.isoformat(),
+        # (states stored before these fields existed: no unit named, GNSS not disagreeing)
+        "device": None,
+        "devices": [],
+        "gnss_disagrees": False,
         **row.state,
         "speed_known": known,
     }
@@ -95,9 +152,18 @@ def position(session: Session, train: str) -> dict[str, Any]:
     # longer than any device may be (DEPOT_HEARTBEAT_S, by the server's clock against the
     # sample's time), where the train is now and how fast it goes are not known — a person
     # must look, rather than read an old coordinate with its old, small uncertainty.
-    age_s = (utcnow() - row.updated_at).total_seconds()
-    stale = age_s > get_settings().heartbeat_s
+    now, heartbeat_s = utcnow(), get_settings().heartbeat_s
+    age_s = (now - row.updated_at).total_seconds()
+    stale = age_s > heartbeat_s
     answer |= {"age_s": age_s, "stale": stale}
+    units = []
+    for unit in answer["devices"]:
+        unit_age = (now - datetime.fromisoformat(unit["updated_at"])).total_seconds()
+        unit_stale = unit_age > heartbeat_s
+        units.append(
+            unit | {"stale": unit_stale} | ({"position_known": False} if unit_stale else {})
+        )
+    answer["devices"] = units
     if stale:
         answer |= {"position_known": False, "speed_known": False, "section": None}
     return answer

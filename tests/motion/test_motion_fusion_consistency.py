@@ -139,10 +139,17 @@ def _cruise(f: TrackFilter, seconds: int) -> None:
 
 
 def test_a_time_jump_beyond_the_largest_gap_starts_again_unknown() -> None:
-    """The trial: t = 1e9 after t ≈ 300 gave position −1.2e17 m, speed −2.4e8 m/s."""
+    """The trial: t = 1e9 after t ≈ 300 gave position −1.2e17 m, speed −2.4e8 m/s.
+    A forward jump is taken once ``restart_confirm_samples`` samples confirm it (the
+    later trial: one corrupt time stamp must not wipe the estimate,
+    test_motion_fusion_order.py)."""
     f = TrackFilter(config=KNOWN_CRUISE)
     _cruise(f, 300)
     assert f.state is not None and f.state.position_known
+    confirm = f.cfg.restart_confirm_samples
+    for k in range(confirm - 1):
+        with pytest.raises(StaleSampleError, match="ahead of the newest"):
+            f.step(1e9 - confirm + 1 + k, 0.0)
     st = f.step(1e9, 0.0)
     assert not st.position_known and not _speed_known(f) and st.direction == 0
     assert abs(st.speed_mps) < 200.0 and abs(st.position_m) < 1e6

@@ -13,17 +13,19 @@ from service.trains import braking as braking_api
 from tests.conftest import ADMIN
 
 URL = "/api/v1/motion/braking-plan"
+# Two channels of two measurements at 1e-2 (SIL-4), 8 ‰ downhill, an obstacle at 5 km: the
+# request of the first test, and the one the CLI's options below stand for.
+TWO_CHANNEL_PLAN = {
+    "speed_mps": 20.0,
+    "deceleration_mps2": 1.0,
+    "gradient_permille": -8.0,
+    "errors": {"delta_l_max_m": 400.0, "measurements": 2, "channels": 2},
+    "obstacle_at_m": 5000.0,
+}
 
 
 def test_a_plan_with_two_channels_meets_sil4(client: TestClient) -> None:
-    body = {
-        "speed_mps": 20.0,
-        "deceleration_mps2": 1.0,
-        "gradient_permille": -8.0,
-        "errors": {"delta_l_max_m": 400.0, "measurements": 2, "channels": 2},
-        "obstacle_at_m": 5000.0,
-    }
-    answer = client.post(URL, json=body, headers=ADMIN)
+    answer = client.post(URL, json=TWO_CHANNEL_PLAN, headers=ADMIN)
     assert answer.status_code == 200, answer.text
     plan = answer.json()
     assert plan["meets_sil4"] is True and plan["protective_section_m"] == 403.0
@@ -72,14 +74,7 @@ def test_the_cli_and_the_api_answer_from_one_builder(
     argv += ["--delta-l-max", "400", "-k", "2", "--channels", "2", "--obstacle-at", "5000"]
     assert cli.main([*argv, "--json"]) == 0
     from_cli = json.loads(capsys.readouterr().out)
-    body = {
-        "speed_mps": 20.0,
-        "deceleration_mps2": 1.0,
-        "gradient_permille": -8.0,
-        "errors": {"delta_l_max_m": 400.0, "measurements": 2, "channels": 2},
-        "obstacle_at_m": 5000.0,
-    }
-    answer = client.post(URL, json=body, headers=ADMIN)
+    answer = client.post(URL, json=TWO_CHANNEL_PLAN, headers=ADMIN)
     assert answer.status_code == 200, answer.text
     assert len(built) == 2 and built[0] == built[1]
     assert from_cli == answer.json()
