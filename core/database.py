@@ -73,7 +73,13 @@ def make_engine(url: str) -> Engine:
             connection.exec_driver_sql("BEGIN IMMEDIATE")
 
         return engine
-    return create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20)
+    engine = create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20)
+    if engine.dialect.name == "postgresql":
+        # Rows the ORM inserts together (a group's axle readings) go in as one multi-row INSERT
+        # rather than an executemany, which PostgreSQL runs as one statement per row. Inserts
+        # with ON CONFLICT keep the executemany (SQLAlchemy decides that itself).
+        engine.dialect.use_insertmanyvalues_wo_returning = True
+    return engine
 
 
 @lru_cache

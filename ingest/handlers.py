@@ -17,7 +17,7 @@ from sqlalchemy.orm import Session
 
 from core.models import Device
 from ingest.liveness import seen
-from ingest.models import RawEvent
+from ingest.models import RawEvent, StoredRaw
 from ingest.schemas import ALL_EVENT_MODELS, EventBase, kind_of
 
 
@@ -26,7 +26,7 @@ class Derivation:
     """What a handler gets: the stored row, its validated event model, and the sending device."""
 
     session: Session
-    raw: RawEvent
+    raw: RawEvent | StoredRaw  # the ORM row on replay, its columns when just stored
     event: Any
     device: Device
     replaying: bool = False

@@ -19,7 +19,7 @@ from sqlalchemy.orm import Session
 
 from core.database import utcnow
 from core.models import Device
-from ingest.models import RawEvent
+from ingest.models import RawEvent, StoredRaw
 from ingest.schemas import section_of
 
 RAW: Table = RawEvent.__table__  # type: ignore[assignment]
@@ -173,7 +173,9 @@ STORED_CHUNK = 1000
 
 def write_answers(session: Session, answers: list[dict[str, Any]]) -> None:
     """Store derived answers (``id``, ``result``, ``derive_error``) with one executemany,
-    which psycopg sends as one pipeline; cleared afterwards."""
+    which psycopg sends as one pipeline; cleared afterwards. (One ``UPDATE … FROM
+    json_to_recordset`` instead cost PostgreSQL more CPU than the prepared updates, measured
+    for groups of 16 axle counts; the Python side was the same.)"""
     if not answers:
         return
     statement = (
@@ -191,7 +193,17 @@ def write_answers(session: Session, answers: list[dict[str, Any]]) -> None:
     answers.clear()
 
 
-def as_raw(raw_id: int, values: dict[str, Any]) -> RawEvent:
-    """A stand-in for the stored row, for derivations (which only read it)."""
-    fields = {k: v for k, v in values.items() if k != "transport"}
-    return RawEvent(id=raw_id, derive_error=None, **fields)
+def as_raw(raw_id: int, values: dict[str, Any]) -> StoredRaw:
+    """The stored row, for derivations (which only read it)."""
+    return StoredRaw(
+        id=raw_id,
+        device_id=values["device_id"],
+        event_id=values["event_id"],
+        kind=values["kind"],
+        occurred_at=values["occurred_at"],
+        received_at=values["received_at"],
+        section=values["section"],
+        body=values["body"],
+        body_sha256=values["body_sha256"],
+        result=values["result"],
+    )

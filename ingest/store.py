@@ -19,7 +19,7 @@ from core.models import Device
 from ingest.checks import check_device_may_send, check_section, parse_event
 from ingest.handlers import Derivation, check_derivable, derive, has_handlers
 from ingest.liveness import restore_pending, seen, snapshot_pending
-from ingest.models import RawEvent
+from ingest.models import RawEvent, StoredRaw
 from ingest.rows import (
     as_raw,
     canonical_sha256,
@@ -121,7 +121,12 @@ def store_event(
 
 
 def run_derivation(
-    session: Session, raw: RawEvent, event: Any, device: Device, *, replaying: bool = False
+    session: Session,
+    raw: RawEvent | StoredRaw,
+    event: Any,
+    device: Device,
+    *,
+    replaying: bool = False,
 ) -> dict[str, Any]:
     """Derive state from a stored event; a failing derivation never loses the raw event."""
     derivation = Derivation(session, raw, event, device, replaying)
