@@ -75,7 +75,9 @@ class AttachmentWindows:
 
 WINDOWS = AttachmentWindows()
 # How long after its arrival a run can still be a rival for evidence (:func:`place`).
-REACH_AFTER_ARRIVAL = WINDOWS.after_arrival + WINDOWS.clock_ahead
+# (A tail image is taken before the arrival is reported; a clock ahead dates it later, by at
+# most ``clock_ahead``.)
+REACH_AFTER_ARRIVAL = max(WINDOWS.after_arrival, WINDOWS.clock_ahead)
 EVIDENCE_WINDOW = WINDOWS.before_departure
 # Runs looked at for one piece of evidence: the latest departures of the section (a conflict
 # puts two or three trains in it at most).
@@ -123,7 +125,7 @@ def _departing(
         for r in candidates
         if r.from_station == station
         and -WINDOWS.before_departure <= at - r.departed_at <= WINDOWS.after_departure + slack
-        and _in_run(r, at, slack + (WINDOWS.after_arrival if slack else timedelta(0)))
+        and _in_run(r, at, REACH_AFTER_ARRIVAL if slack else timedelta(0))
         and (r.departed_at <= at or not holding)
     ]
 
@@ -148,14 +150,13 @@ def place(candidates: Sequence[Run], at: datetime, station: str) -> Placement:
         chosen = min(holding, key=lambda r: (r.departed_at, r.id))
     elif after:
         chosen = max(after, key=lambda r: (r.arrived_at or at, r.id))
-    ahead = WINDOWS.after_arrival + WINDOWS.clock_ahead
     arrived_lately = [
         r
         for r in candidates
         if r.to_station == station
         and r.arrived_at is not None
         and r.departed_at <= at
-        and r.arrived_at < at <= r.arrived_at + ahead
+        and r.arrived_at < at <= r.arrived_at + REACH_AFTER_ARRIVAL
     ]
     late_departing = _departing(candidates, at, station, WINDOWS.clock_ahead, bool(holding))
     core = {r.id for r in (*holding, *departing)}

@@ -11,8 +11,9 @@ attached to, or nothing at all:
 - attached to another run or to none, with this run among its rivals;
 - attached to no run, or uncertain, and *received by the server* while this run held the
   section (from :attr:`AttachmentWindows.before_departure` before its departure was received
-  to :attr:`AttachmentWindows.recently_closed` after its arrival was): the server's clock
-  says it may be this train's whatever the device's clock says (a counter 15 min behind).
+  to :attr:`AttachmentWindows.recently_closed` after its arrival was), and not dated after
+  the run's arrival by more than a clock may be ahead: the server's clock says it may be this
+  train's whatever the device's clock says (a counter 15 min behind).
 
 Everything is derived from the stored evidence and runs, so a re-decision and a replay give
 the same. Spec gap (clearance.md, protocol.md say evidence belongs to "the run occupying the
@@ -62,8 +63,14 @@ def _received_window(run: Run) -> tuple[datetime, datetime | None]:
     return start, None if arrival is None else arrival + WINDOWS.recently_closed
 
 
-def received_during(run: Run, received: datetime | None) -> bool:
+def received_during(run: Run, row: Any, received: datetime | None) -> bool:
+    """Received while ``run`` held the section (or soon after), and not dated after the run's
+    arrival by more than a clock may be ahead: evidence dated later cannot be this train's
+    with an allowed clock (and an arrival interlocking behind leaves the run without its
+    arrival evidence, which asks for a person anyway)."""
     if received is None:
+        return False
+    if run.arrived_at is not None and row.occurred_at > run.arrived_at + REACH_AFTER_ARRIVAL:
         return False
     start, end = _received_window(run)
     return start <= received and (end is None or received <= end)
@@ -143,7 +150,7 @@ def judge(session: Session, run: Run) -> Judgement:
         if _settled(placement, row):
             continue
         involved = {r.id for r in placement.rivals} | {row.run_id}
-        if run.id in involved or received_during(run, received.get(row.id)):
+        if run.id in involved or received_during(run, row, received.get(row.id)):
             doubts.append(words(row))
             if row.run_id == run.id:
                 unproven.add(row.id)
@@ -173,7 +180,7 @@ def doubted_runs(
                 ),
             )
         )
-        found.update({r.id: r for r in nearby if received_during(r, received)})
+        found.update({r.id: r for r in nearby if received_during(r, row, received)})
     return sorted(
         (r for r in found.values() if r.id != row.run_id and r.arrived_at is not None),
         key=lambda r: (r.departed_at, r.id),
