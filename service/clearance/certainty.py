@@ -39,10 +39,10 @@ from service.clearance.attribution import (
     REACH_AFTER_ARRIVAL,
     WINDOWS,
     Placement,
-    spanning,
     eligible_at,
     place,
     placement_at,
+    spanning,
 )
 from service.clearance.models import AxleReading, CarPassage, EotReport, Run
 
@@ -106,7 +106,9 @@ def _rows(session: Session, run: Run) -> list[Any]:
         ends.append(run.arrived_at + REACH_AFTER_ARRIVAL)
     end = max(ends) if run.arrived_at is not None else None
     lo, hi = _received_window(run)
-    received = select(RawEvent.id).where(RawEvent.section == run.section, RawEvent.received_at >= lo)
+    received = select(RawEvent.id).where(
+        RawEvent.section == run.section, RawEvent.received_at >= lo
+    )
     if hi is not None:
         received = received.where(RawEvent.received_at <= hi)
     rows: list[Any] = []
@@ -137,11 +139,12 @@ def judge(session: Session, run: Run) -> Judgement:
     if not rows:
         return Judgement(frozenset(), ())
     times = {row.id: row.occurred_at for row in rows}
-    received = dict(
-        session.execute(  # type: ignore[arg-type]
+    received: dict[int, datetime] = {
+        ident: at
+        for ident, at in session.execute(
             select(RawEvent.id, RawEvent.received_at).where(RawEvent.id.in_(list(times)))
-        ).all()
-    )
+        )
+    }
     runs = spanning(session, run.section, min(times.values()), max(times.values()))
     unproven: set[int] = set()
     doubts: list[str] = []
@@ -157,9 +160,7 @@ def judge(session: Session, run: Run) -> Judgement:
     return Judgement(frozenset(unproven), tuple(doubts))
 
 
-def doubted_runs(
-    session: Session, section: str, row: Any, received: datetime | None
-) -> list[Run]:
+def doubted_runs(session: Session, section: str, row: Any, received: datetime | None) -> list[Run]:
     """The arrived runs, other than the one ``row`` was attached to, that the new evidence
     casts doubt on (to be decided again now): none when it is certain."""
     placement = placement_at(session, section, row.occurred_at, row.station)

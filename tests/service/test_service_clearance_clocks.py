@@ -237,7 +237,9 @@ def _traffic(seed: int) -> list[tuple[datetime, str, str, datetime, dict[str, An
         disc = rng.random() < 0.8
         delay = timedelta(seconds=rng.choice([0, 0, 70, 200]))
         out.append((photo + delay, cam, "snapshot", photo + offsets[cam], {"disc": disc}))
-        out.append((real + transit, f"{end}-ilk", "train_arrived", real + transit, {"train": train}))
+        out.append(
+            (real + transit, f"{end}-ilk", "train_arrived", real + transit, {"train": train})
+        )
         real += transit + timedelta(seconds=rng.choice([30, 60, 150, 400]))
     return sorted(out, key=lambda e: e[0])
 
@@ -261,9 +263,10 @@ def _photos(session: Session) -> dict[str, Any]:
     listed = [i for r in runs for i in (r.evidence or {}).get("snapshot_ids", [])]
     return {
         "listed_once": len(listed) == len(set(listed)),
-        "photos": sorted((s.device_id, s.occurred_at, s.verdict) for s in session.scalars(
-            select(Snapshot).where(Snapshot.run_id.is_not(None))
-        )),
+        "photos": sorted(
+            (s.device_id, s.occurred_at, s.verdict)
+            for s in session.scalars(select(Snapshot).where(Snapshot.run_id.is_not(None)))
+        ),
     }
 
 
