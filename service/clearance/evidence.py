@@ -14,6 +14,7 @@ from core.schemas import format_instant
 from identification.consist import compare_consists
 from ingest.liveness import silent_at
 from ingest.models import Snapshot
+from service.clearance.certainty import judge
 from service.clearance.models import AxleReading, CarPassage, EotReport, Run
 from service.clearance.readers import disagreement_reason, reader_disagreements
 from service.clearance.rules import (
@@ -173,8 +174,11 @@ def _axles(
     return None if any(c is None for c in cars) else sum(c.axles for c in cars if c is not None)
 
 
-def _eot(session: Session, run: Run) -> tuple[EotEvidence | None, list[EotReport]]:
-    """Arrival-side EOT reports from departure to arrival + 60 s, oldest first."""
+def _eot(
+    session: Session, run: Run, unproven: frozenset[int]
+) -> tuple[EotEvidence | None, list[EotReport]]:
+    """Arrival-side EOT reports from departure to arrival + 60 s, oldest first (but those
+    that cannot be placed in the run with certainty)."""
     rows = [
         r
         for r in session.scalars(
@@ -182,7 +186,8 @@ def _eot(session: Session, run: Run) -> tuple[EotEvidence | None, list[EotReport
             .where(EotReport.run_id == run.id, EotReport.side == "arrival")
             .order_by(EotReport.occurred_at, EotReport.id)
         )
-        if r.occurred_at >= run.departed_at
+        if r.id not in unproven
+        and r.occurred_at >= run.departed_at
         and (run.arrived_at is None or r.occurred_at <= run.arrived_at + EOT_AFTER_ARRIVAL)
     ]
     if run.eot_unit is None and not rows:
@@ -222,10 +227,21 @@ class Gathered:
 def gather(session: Session, run: Run, section: Section) -> Gathered:
     """Everything attached to the run, and the devices whose evidence is missing because
     they were silent (their items stay ``None``: missing, never assumed)."""
-    snapshots = list(session.scalars(select(Snapshot).where(Snapshot.run_id == run.id)))
-    passages = list(session.scalars(select(CarPassage).where(CarPassage.run_id == run.id)))
-    readings = list(session.scalars(select(AxleReading).where(AxleReading.run_id == run.id)))
-    eot, eot_rows = _eot(session, run)
+    judged = judge(session, run)
+    attached = list(session.scalars(select(Snapshot).where(Snapshot.run_id == run.id)))
+    # Evidence that cannot be placed in this run with certainty proves nothing (certainty).
+    snapshots = [s for s in attached if s.id not in judged.unproven]
+    passages = [
+        p
+        for p in session.scalars(select(CarPassage).where(CarPassage.run_id == run.id))
+        if p.id not in judged.unproven
+    ]
+    readings = [
+        r
+        for r in session.scalars(select(AxleReading).where(AxleReading.run_id == run.id))
+        if r.id not in judged.unproven
+    ]
+    eot, eot_rows = _eot(session, run, judged.unproven)
     contributed = (
         {s.device_id for s in snapshots}
         | {p.device_id for p in passages}
@@ -252,7 +268,7 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         arrival_axles=_axles(session, readings, "arrival", best.get("arrival")),
         stale_devices=tuple(sorted(stale)),
         eot=eot,
-        contradictions=tuple(contradictions(snapshots, readings)),
+        contradictions=(*judged.doubts, *contradictions(snapshots, readings)),
     )
     summary = {
         "tail": {
@@ -275,7 +291,8 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         "consist_comparison": shown,
         "axles": {"departure": evidence.departure_axles, "arrival": evidence.arrival_axles},
         "stale_devices": sorted(stale),
-        "snapshot_ids": sorted(s.id for s in snapshots),
+        "snapshot_ids": sorted(s.id for s in attached),
+        "uncertain_evidence": sorted(judged.unproven),
         "eot": _eot_summary(evidence, eot_rows),
     }
     return Gathered(evidence, summary)

@@ -20,7 +20,7 @@ from sqlalchemy.orm import Session
 from core.models import Device, Section
 from core.schemas import format_instant
 from ingest.models import RawEvent
-from service.clearance.attribution import IN_SECTION
+from service.clearance.attribution import IN_SECTION, skewed_apart
 from service.clearance.models import Run
 
 
@@ -52,7 +52,7 @@ def conflict_words(session: Session, section: Section, run: Run, busy: bool) -> 
             f" and was not cleared{held}: a person must look"
         )
     other = holder_at(session, section, run)
-    if other is not None:
+    if other is not None and not skewed_apart(other, run):  # a clock ahead: not two trains
         return (
             f"train {run.train} departed into section {section.id} while train {other.train}"
             f" (run {other.id}) was in it, so the section was not cleared: a person must look"

@@ -10,7 +10,7 @@ from sqlalchemy.orm import Session
 from core.auth import Principal
 from core.errors import NotFound
 from core.models import Section
-from service.clearance import attribution, occupancy, unseen
+from service.clearance import attribution, certainty, occupancy, unseen
 from service.clearance.attribution import forget_runs, run_at, side_of
 from service.clearance.doubts import (
     blocking_first,
@@ -335,6 +335,9 @@ def attach(
     row.run_id = None if run is None else run.id
     row.side = None if run is None else side_of(run, station)
     session.add(row)
+    # Evidence a wrong clock may have misplaced is a doubt for every run it may be (certainty).
+    for other in certainty.doubted_runs(session, section_id, row, received):
+        evaluate(session, other, section, received=received)
     if run is None:
         return {"run": None, "note": f"no run in section {section_id} at that time; evidence kept"}
     if run.arrived_at is not None:

@@ -64,7 +64,9 @@ def test_a_late_absent_photo_of_the_cleared_run_raises_the_alarm(
     assert run_of(line, r1)["decision"]["verdict"] == "incomplete"
     assert line.section()["state"] == "alarm"
     line.snapshot("B-cam", NOW + timedelta(seconds=25), jpeg(disc=True, seed=21))
-    assert line.arrive(NOW + timedelta(seconds=30), train="2043")["verdict"] == "complete"
+    # Dated 115 s after r1's arrival, the photo may be r1's tail by a camera clock ahead
+    # (allowed up to 300 s): it proves nothing for r2 (test_service_clearance_clocks, D3).
+    assert line.arrive(NOW + timedelta(seconds=30), train="2043")["verdict"] == "undetermined"
     assert run_of(line, r2)["evidence"]["snapshot_ids"] != [posted["snapshot"]]
     assert line.section()["state"] == "alarm"  # r1's lost cars: a person must look
 
