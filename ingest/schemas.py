@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from datetime import UTC, datetime, timezone
 from typing import Annotated, Any, ClassVar, Literal, get_args
 
@@ -50,8 +51,23 @@ def _integral(value: object) -> object:
 
 # An integer field: a JSON number with no fraction; never a boolean or a string.
 Integer = Annotated[int, BeforeValidator(_integral)]
+
+
+def _iso_text(value: object) -> object:
+    """protocol.md: "times in ISO 8601 with offset". Pydantic's lax datetime would also read a
+    Unix time, as a number or as digits in a string; a device sending one is refused."""
+    if isinstance(value, bool | int | float) or (
+        isinstance(value, str) and not _ISO_DATE.match(value)
+    ):
+        raise ValueError("a time must be ISO 8601 text with an offset, e.g. 2026-11-23T10:15:00Z")
+    return value
+
+
+_ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}[Tt ]", re.ASCII)
 # Times come as ISO-8601 text, so they alone are parsed (every other field is strict).
-DeviceTime = Annotated[AwareDatetime, Field(strict=False), AfterValidator(_plausible)]
+DeviceTime = Annotated[
+    AwareDatetime, Field(strict=False), BeforeValidator(_iso_text), AfterValidator(_plausible)
+]
 EventId = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[\x21-\x7e]+$")]
 SectionId = Annotated[str, Field(min_length=1, max_length=32)]
 TrainNumber = Annotated[str, Field(min_length=1, max_length=32)]

@@ -99,6 +99,10 @@ def test_every_kind_accepted_once(client: TestClient, device: str, body: dict[st
         (event("x", "axle_count", at="yesterday", section="AB", axles=3), "occurred_at"),
         (event("x", "axle_count", at="2026-11-23T10:15:00", section="AB", axles=3), "occurred_at"),
         (event("x", "axle_count", at="0001-01-01T00:00:00Z", section="AB", axles=3), "occurred_at"),
+        # protocol.md: times in ISO 8601 with offset; a Unix time (number or text) is refused
+        (event("x", "axle_count", at=1764700000, section="AB", axles=3), "occurred_at"),
+        (event("x", "axle_count", at="1764700000", section="AB", axles=3), "occurred_at"),
+        (event("x", "axle_count", at=True, section="AB", axles=3), "occurred_at"),
         (event("", "axle_count", section="AB", axles=3), "event_id"),
         (event("x" * 65, "axle_count", section="AB", axles=3), "event_id"),
         (event("x", "teleport", section="AB"), "kind"),
