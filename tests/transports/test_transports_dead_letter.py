@@ -4,6 +4,7 @@ subject with the reason, and is acknowledged: never silently dropped, never retr
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -56,7 +57,11 @@ def test_undeliverable_message_goes_to_dead_letters_with_reason(tmp_path: Path) 
     assert letter.subject == f"{names.nats_prefix}.dead.A-cam-1"
     assert letter.data == payload  # as the device sent it, so an operator can send it again
     reason = letter.headers["Depot-Dead-Reason"]
-    assert f"failed {MAX_DELIVER} deliveries" in reason and "database unavailable" in reason
+    # At least MAX_DELIVER: on a loaded machine a delivery can also expire (ack_wait 1 s) while
+    # the consumer still tries the database, and JetStream counts it (CI saw "failed 4").
+    failed = re.search(r"failed (\d+) deliveries", reason)
+    assert failed is not None and int(failed.group(1)) >= MAX_DELIVER, reason
+    assert "database unavailable" in reason, reason
     assert (info.num_ack_pending, info.num_pending) == (0, 0), "the dead letter was not acked"
 
 
