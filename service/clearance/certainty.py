@@ -41,7 +41,6 @@ from service.clearance.attribution import (
     Placement,
     eligible_at,
     place,
-    placement_at,
     spanning,
 )
 from service.clearance.models import AxleReading, CarPassage, EotReport, Run
@@ -160,10 +159,12 @@ def judge(session: Session, run: Run) -> Judgement:
     return Judgement(frozenset(unproven), tuple(doubts))
 
 
-def doubted_runs(session: Session, section: str, row: Any, received: datetime | None) -> list[Run]:
+def doubted_runs(
+    session: Session, section: str, row: Any, received: datetime | None, placement: Placement
+) -> list[Run]:
     """The arrived runs, other than the one ``row`` was attached to, that the new evidence
-    casts doubt on (to be decided again now): none when it is certain."""
-    placement = placement_at(session, section, row.occurred_at, row.station)
+    casts doubt on (to be decided again now): none when it is certain. ``placement`` is the
+    row's own (:func:`attribution.placement_at`), as ``attach`` found it."""
     if _settled(placement, row):
         return []
     found = {r.id: r for r in placement.rivals}

@@ -11,7 +11,7 @@ from core.auth import Principal
 from core.errors import NotFound
 from core.models import Section
 from service.clearance import attribution, certainty, occupancy, unseen
-from service.clearance.attribution import forget_runs, run_at, side_of
+from service.clearance.attribution import forget_runs, placement_at, side_of
 from service.clearance.doubts import (
     blocking_first,
     not_ahead,
@@ -331,12 +331,15 @@ def attach(
     # Decided before the row joins the session: no insert and update for one piece (a group of
     # readings then goes in with one insert, when the session next flushes).
     with session.no_autoflush:
-        run = run_at(session, section_id, at, station)
-    row.run_id = None if run is None else run.id
-    row.side = None if run is None else side_of(run, station)
+        placement = placement_at(session, section_id, at, station)
+        run = placement.owner
+        row.run_id = None if run is None else run.id
+        row.side = None if run is None else side_of(run, station)
+        # Evidence a wrong clock may have misplaced is a doubt for every run it may be
+        # (certainty); asked before the row joins the session, so its query flushes no row.
+        doubted = certainty.doubted_runs(session, section_id, row, received, placement)
     session.add(row)
-    # Evidence a wrong clock may have misplaced is a doubt for every run it may be (certainty).
-    for other in certainty.doubted_runs(session, section_id, row, received):
+    for other in doubted:
         evaluate(session, other, section, received=received)
     if run is None:
         return {"run": None, "note": f"no run in section {section_id} at that time; evidence kept"}
