@@ -4,7 +4,8 @@ Three servers, each uvicorn with 2 workers on 127.0.0.1, each on its own Postgre
 the floor (``bench/floor_app.py``: key check, pydantic, one ``INSERT … ON CONFLICT DO NOTHING
 RETURNING`` plus commit per request, one multi-row insert per batch), depot with group commit
 (the default) and depot with ``DEPOT_GROUP_COMMIT_MS=0``. The same load generator drives them in
-alternating rounds: ``wrk`` (install with ``apt-get install -y wrk``) with a Lua script, 32
+alternating rounds (depot, like the floor, without a log line per request:
+``DEPOT_ACCESS_LOG=false``): ``wrk`` (install with ``apt-get install -y wrk``) with a Lua script, 32
 connections for single ``axle_count`` events (and single ``heartbeat`` events, which no feature
 derives from: the price of ingest itself), 8 connections for batches of 500 heartbeats; the
 Python client in ``bench/_load.py`` when ``wrk`` is absent. Printed: events/s, p50, p99 per
@@ -126,11 +127,13 @@ def main() -> None:
         print("the floor needs PostgreSQL; nothing measured")
         return
     with ExitStack() as stack:
-        grouped = stack.enter_context(serve(bench_database("depot_bench_ingest")))
+        # Without uvicorn's access log, as the floor runs (``--log-level warning``).
+        quiet = {"DEPOT_ACCESS_LOG": "false"}
+        grouped = stack.enter_context(serve(bench_database("depot_bench_ingest"), extra_env=quiet))
         ungrouped = stack.enter_context(
             serve(
                 bench_database("depot_bench_ingest_nogc"),
-                extra_env={"DEPOT_GROUP_COMMIT_MS": "0"},
+                extra_env={**quiet, "DEPOT_GROUP_COMMIT_MS": "0"},
             )
         )
         keys = setup_depot(grouped)

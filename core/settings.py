@@ -50,6 +50,10 @@ class Settings(BaseSettings):
     group_commit_max: int = Field(default=64, ge=1, le=1000)
     host: str = "127.0.0.1"
     port: int = 8000
+    # One log line per HTTP request (uvicorn's access log). A station fleet sends thousands of
+    # events a second, each stored with its receive time; the line costs a worker about 2 % of
+    # its CPU per event, so a deployment may turn it off and read /metrics instead.
+    access_log: bool = True
     # Reverse proxies whose X-Forwarded-For / X-Forwarded-Proto are believed (comma-separated
     # addresses or CIDR networks, "*" any, "" none): behind them the client address in the
     # logs is the real one and a request that came in over TLS is https (Secure cookies).

@@ -15,6 +15,7 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
+from core.errors import DepotError
 from core.models import Device
 from ingest.liveness import seen
 from ingest.models import RawEvent, StoredRaw
@@ -38,10 +39,24 @@ HandlerTable = Mapping[type[EventBase], Sequence[Handler]]
 # before anything is stored: they raise core.errors.Unprocessable (422) with the reason.
 Validator = Callable[[Session, Any], None]
 ValidatorTable = Mapping[type[EventBase], Sequence[Validator]]
+# What the handlers of a kind will answer, foreseen from stored state before the raw event is
+# stored (None: not foreseeable, e.g. a run that has arrived is decided again). Stored with the
+# raw row in its insert, it saves the answer's second write (an UPDATE per event); it may only
+# save work, never change what is derived or answered: the handlers still run, and what they
+# answer replaces the foreseen answer when the two differ (an earlier event of the same group
+# opened a run, say). Called with the device and the validated event, under the transaction.
+Foresight = Callable[[Session, Device, Any], dict[str, Any] | None]
+ForesightTable = Mapping[type[EventBase], Foresight]
+# The features' section lock (one writer decides a section at a time). A group that foresees
+# answers takes its sections' locks, in its lock order, before its rows are stored, so that a
+# foresight reads the runs as the derivations will; the derivations then find them held.
+SectionLock = Callable[[Session, str], object]
 log = logging.getLogger("depot.ingest")
 # The installed table, indexed by kind (filled by `install`; empty means liveness only).
 HANDLERS: dict[str, tuple[Handler, ...]] = {}
 VALIDATORS: dict[str, tuple[Validator, ...]] = {}
+FORESIGHTS: dict[str, Foresight] = {}
+SECTION_LOCK: list[SectionLock] = []
 
 
 def check_derivable(session: Session, event: Any) -> None:
@@ -50,7 +65,12 @@ def check_derivable(session: Session, event: Any) -> None:
         validate(session, event)
 
 
-def install(table: HandlerTable, validators: ValidatorTable | None = None) -> None:
+def install(
+    table: HandlerTable,
+    validators: ValidatorTable | None = None,
+    foresights: ForesightTable | None = None,
+    section_lock: SectionLock | None = None,
+) -> None:
     """Install the application's handler table; every event model must have an entry.
 
     An entry may be empty (the event only proves the device alive). Raises ValueError when a
@@ -64,6 +84,38 @@ def install(table: HandlerTable, validators: ValidatorTable | None = None) -> No
     HANDLERS.update({kind_of(model): tuple(handlers) for model, handlers in table.items()})
     VALIDATORS.clear()
     VALIDATORS.update({kind_of(model): tuple(v) for model, v in (validators or {}).items()})
+    FORESIGHTS.clear()
+    FORESIGHTS.update({kind_of(model): f for model, f in (foresights or {}).items()})
+    if FORESIGHTS and section_lock is None:
+        raise ValueError("foresights need the section lock their derivations take")
+    SECTION_LOCK[:] = [] if section_lock is None else [section_lock]
+
+
+def can_foresee(kind: str) -> bool:
+    """Whether answers to events of ``kind`` may be foreseen (:func:`foreseen_answer`)."""
+    return kind in FORESIGHTS
+
+
+def lock_section(session: Session, section: str) -> None:
+    """Take the features' lock of ``section`` (nothing when none is installed)."""
+    for lock in SECTION_LOCK:
+        lock(session, section)
+
+
+def foreseen_answer(session: Session, device: Device, event: Any) -> dict[str, Any] | None:
+    """The answer the handlers of the event's kind will give (``{"event_id", "status":
+    "created", ...}``), when its foresight can tell; None otherwise, or when the foresight
+    is refused (the handlers then meet the same refusal, as without a foresight)."""
+    foresee = FORESIGHTS.get(event.kind)
+    if foresee is None:
+        return None
+    try:
+        answer = foresee(session, device, event)
+    except DepotError:
+        return None
+    if answer is None:
+        return None
+    return {"event_id": event.event_id, "status": "created", **answer}
 
 
 # Work a feature can do on an event before anything is stored: in a worker thread, outside the

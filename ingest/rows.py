@@ -171,12 +171,28 @@ def stored_many(
 STORED_CHUNK = 1000
 
 
+# The answers' update as the driver's own text: a group of 16 single events spent a fifth of
+# its worker's CPU compiling and binding the ORM-level executemany, for 16 identical updates.
+# psycopg still prepares it once and sends the parameter sets as one pipeline.
+_ANSWER_UPDATE = "UPDATE raw_events SET result = %s::json, derive_error = %s WHERE id = %s"
+_ANSWER_JSON: TypeAdapter[dict[str, Any]] = TypeAdapter(dict[str, Any])
+
+
 def write_answers(session: Session, answers: list[dict[str, Any]]) -> None:
     """Store derived answers (``id``, ``result``, ``derive_error``) with one executemany,
     which psycopg sends as one pipeline; cleared afterwards. (One ``UPDATE … FROM
     json_to_recordset`` instead cost PostgreSQL more CPU than the prepared updates, measured
     for groups of 16 axle counts; the Python side was the same.)"""
     if not answers:
+        return
+    if session.get_bind().dialect.name == "postgresql":
+        session.flush()  # what the derivations added goes first, as an ORM statement would
+        parameters = [
+            (_ANSWER_JSON.dump_json(a["result"]).decode(), a["derive_error"], a["id"])
+            for a in answers
+        ]
+        session.connection().exec_driver_sql(_ANSWER_UPDATE, parameters)
+        answers.clear()
         return
     statement = (
         update(RAW)

@@ -37,6 +37,7 @@ def _serve(args: argparse.Namespace) -> int:
         port=args.port or settings.port,
         workers=args.workers,
         log_level="info",
+        access_log=settings.access_log,
         # The app reads X-Forwarded-* itself, from DEPOT_TRUSTED_PROXIES only.
         proxy_headers=False,
         # uvicorn kills a worker that answers no health ping for this long; its default (5 s)

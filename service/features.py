@@ -9,9 +9,10 @@ from __future__ import annotations
 
 from ingest import handlers as ingest_handlers
 from ingest import schemas as ev
-from ingest.handlers import HandlerTable, ValidatorTable
+from ingest.handlers import ForesightTable, HandlerTable, ValidatorTable
 from service.clearance import handlers as clearance
 from service.clearance import tail
+from service.clearance.locks import lock_section
 from service.fleet import handlers as fleet
 from service.setup import service as setup
 from service.trains import handlers as trains
@@ -39,7 +40,16 @@ VALIDATOR_TABLE: ValidatorTable = {
 }
 
 
+# Answers known before the event is stored (stored with it: no second write). Only where the
+# answer follows from stored state alone; a wrong foresight costs the write it would save.
+FORESIGHT_TABLE: ForesightTable = {
+    ev.AxleCount: clearance.axle_count_foreseen,
+}
+
+
 def install() -> None:
     """Install the tables into ingest (idempotent); called by the app factory and the CLI."""
-    ingest_handlers.install(HANDLER_TABLE, VALIDATOR_TABLE)
+    ingest_handlers.install(
+        HANDLER_TABLE, VALIDATOR_TABLE, FORESIGHT_TABLE, section_lock=lock_section
+    )
     setup.CAR_REGISTERED[:] = [fleet.derive_waiting]

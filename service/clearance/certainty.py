@@ -26,7 +26,7 @@ not caught here.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import datetime, timedelta
 from typing import Any
 
 from sqlalchemy import and_, or_, select
@@ -36,7 +36,9 @@ from core.schemas import format_instant
 from ingest.models import RawEvent, Snapshot
 from service.clearance.attribution import (
     EVIDENCE_MODELS,
+    LOCKED,
     REACH_AFTER_ARRIVAL,
+    SECTION_RUNS,
     WINDOWS,
     Placement,
     eligible_at,
@@ -159,6 +161,54 @@ def judge(session: Session, run: Run) -> Judgement:
     return Judgement(frozenset(unproven), tuple(doubts))
 
 
+# Under the section's lock, the runs a receive time may doubt are read once for a span of
+# receive times (a group's events are received within milliseconds of each other).
+RECEIVED_RUNS = "depot_runs_by_received"
+RECEIVED_SPAN = timedelta(minutes=5)
+
+
+def _runs_received_near(
+    session: Session, section: str, earliest: datetime, latest: datetime
+) -> list[Run]:
+    """Every run of ``section`` that may have held it when evidence was received at some
+    instant from ``earliest`` to ``latest`` (a superset: :func:`received_during` decides)."""
+    return list(
+        session.scalars(
+            select(Run).where(
+                Run.section == section,
+                or_(
+                    Run.departure_received_at <= latest + WINDOWS.before_departure,
+                    Run.departure_received_at.is_(None),
+                ),
+                or_(
+                    Run.arrival_received_at >= earliest - WINDOWS.recently_closed,
+                    Run.arrival_received_at.is_(None),
+                ),
+            )
+        )
+    )
+
+
+def _received_near(session: Session, section: str, received: datetime) -> list[Run]:
+    """:func:`_runs_received_near` for one instant, read once per span under the lock.
+
+    The read is kept only while the section's runs, as :func:`attribution.placement_at` holds
+    them, are the same object: a departure, an arrival or an action drops that
+    (``forget_runs``), and with it this read, so nothing a group changed is missed."""
+    runs_held = session.info.get(SECTION_RUNS, {}).get(section)
+    if section not in session.info.get(LOCKED, ()) or runs_held is None:
+        return _runs_received_near(session, section, received, received)
+    cache: dict[str, tuple[Any, datetime, datetime, list[Run]]] = session.info.setdefault(
+        RECEIVED_RUNS, {}
+    )
+    held = cache.get(section)
+    if held is None or held[0] is not runs_held or not held[1] <= received <= held[2]:
+        earliest, latest = received - RECEIVED_SPAN, received + RECEIVED_SPAN
+        runs = _runs_received_near(session, section, earliest, latest)
+        held = cache[section] = (runs_held, earliest, latest, runs)
+    return held[3]
+
+
 def doubted_runs(
     session: Session, section: str, row: Any, received: datetime | None, placement: Placement
 ) -> list[Run]:
@@ -169,19 +219,7 @@ def doubted_runs(
         return []
     found = {r.id: r for r in placement.rivals}
     if received is not None:
-        nearby = session.scalars(
-            select(Run).where(
-                Run.section == section,
-                or_(
-                    Run.departure_received_at <= received + WINDOWS.before_departure,
-                    Run.departure_received_at.is_(None),
-                ),
-                or_(
-                    Run.arrival_received_at >= received - WINDOWS.recently_closed,
-                    Run.arrival_received_at.is_(None),
-                ),
-            )
-        )
+        nearby = _received_near(session, section, received)
         found.update({r.id: r for r in nearby if received_during(r, row, received)})
     return sorted(
         (r for r in found.values() if r.id != row.run_id and r.arrived_at is not None),

@@ -6,12 +6,14 @@ from collections.abc import Callable
 from typing import Any, TypeVar
 
 from sqlalchemy import select
+from sqlalchemy.orm import Session
 
-from core.models import Car
+from core.models import Car, Device
 from identification import manchester, time_pulse, wheel_marks
 from identification.rules import agreed_number
 from ingest.handlers import Derivation
 from service.clearance import service
+from service.clearance.attribution import placement_at
 from service.clearance.models import AxleReading, CarPassage, EotReport, WheelMarking
 
 Row = TypeVar("Row")
@@ -65,6 +67,13 @@ def train_arrived(d: Derivation) -> dict[str, Any]:
 
 def axle_count(d: Derivation) -> dict[str, Any]:
     return attach_evidence(d, evidence_row(AxleReading, d, axles=d.event.axles))
+
+
+def axle_count_foreseen(session: Session, device: Device, event: Any) -> dict[str, Any] | None:
+    """What :func:`axle_count` will answer, as the section's runs stand (under the section's
+    lock, which the group took): the run the count is attached to and its side, or none."""
+    placement = placement_at(session, event.section, event.occurred_at, device.station)
+    return service.attached_answer(event.section, placement.owner, device.station)
 
 
 def eot_status(d: Derivation) -> dict[str, Any]:

@@ -9,6 +9,7 @@ from sqlalchemy.orm import Session, SessionTransaction
 from core.errors import NotFound
 from core.models import Section
 from service.clearance.attribution import LOCKED, SECTION_RUNS
+from service.clearance.certainty import RECEIVED_RUNS
 
 
 def lock_section(session: Session, section_id: str) -> Section:
@@ -34,6 +35,7 @@ def _locks_released(session: Session, *_: object) -> None:
     # A rollback, even to a savepoint, may release the lock (and undo what was read under it).
     session.info.pop(LOCKED, None)
     session.info.pop(SECTION_RUNS, None)
+    session.info.pop(RECEIVED_RUNS, None)
 
 
 @event.listens_for(Session, "after_transaction_end")

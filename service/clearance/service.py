@@ -341,12 +341,22 @@ def attach(
     session.add(row)
     for other in doubted:
         evaluate(session, other, section, received=received)
+    answer = attached_answer(section_id, run, station)
+    if answer is not None:
+        return answer
+    assert run is not None  # no answer yet: the run has arrived and is decided again
+    reevaluated = evaluate(session, run, section, received=received)
+    return {"run": run.id, "side": row.side, "reevaluated": reevaluated}
+
+
+def attached_answer(section_id: str, run: Run | None, station: str) -> dict[str, Any] | None:
+    """What :func:`attach` answers for evidence from ``station`` attached to ``run``, unless
+    the run has arrived (None: its re-decision is part of the answer)."""
     if run is None:
         return {"run": None, "note": f"no run in section {section_id} at that time; evidence kept"}
     if run.arrived_at is not None:
-        reevaluated = evaluate(session, run, section, received=received)
-        return {"run": run.id, "side": row.side, "reevaluated": reevaluated}
-    return {"run": run.id, "side": row.side}
+        return None
+    return {"run": run.id, "side": side_of(run, station)}
 
 
 def act(

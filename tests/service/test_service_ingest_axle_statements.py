@@ -90,12 +90,6 @@ def _stored_answers(session: Session, prefix: str) -> dict[str, dict[str, Any]]:
     return {event_id: result for event_id, result in rows}
 
 
-@pytest.mark.xfail(
-    reason="since evidence a wrong clock may have misplaced is a doubt (clearance/certainty.py),"
-    " each axle count that fits no open run reads the runs it may doubt and flushes: 4 counts"
-    " send 18 statements and 4 reading inserts; to be read once per group (issue 12)",
-    strict=False,
-)
 def test_a_group_of_axle_counts_inserts_its_readings_with_one_statement(
     client: TestClient, session: Session, executions: list[str]
 ) -> None:
@@ -134,3 +128,38 @@ def test_counts_joining_a_running_train_go_in_together(
     # A retry of the whole group is answered from the stored answers, unchanged.
     again = _group(session, items, executions)
     assert [o[1] for o in again] == [{**o[1], "status": "duplicate"} for o in outcomes]
+
+
+def _answer_updates(executions: list[str]) -> int:
+    return sum(text.startswith("UPDATE raw_events SET result") for text in executions)
+
+
+def test_counts_whose_answer_is_foreseen_are_answered_in_their_insert(
+    client: TestClient, session: Session, executions: list[str]
+) -> None:
+    """No run holds the section: every count's answer is known before it is stored, and goes
+    in with its raw row (no second write of the answer)."""
+    build_line(client)
+    outcomes = _group(session, _counts(session, "seen", 12), executions)
+    assert [o[0] for o in outcomes] == [201] * 12
+    assert _answer_updates(executions) == 0, Counter(executions)
+    assert _stored_answers(session, "seen") == {o[1]["event_id"]: o[1] for o in outcomes}
+
+
+def test_a_departure_in_the_same_group_overrules_the_foreseen_answer(
+    client: TestClient, session: Session, executions: list[str]
+) -> None:
+    """The departure is derived before the arrival counter's counts (the group derives in
+    section, then device order: A-ilk before B-ac) and opens the run they belong to: what was
+    foreseen (no run) is wrong, and the answers given and stored are the derivation's."""
+    build_line(client)
+    interlocking = session.get_one(Device, "A-ilk")
+    departure = event("dep-2", "train_departed", "2026-11-23T09:59:30Z", section="AB")
+    departure["train"] = "4713"
+    items = [(interlocking, service.validate_event(interlocking, departure), departure)]
+    items += [item for item in _counts(session, "late", 12) if item[0].id == "B-ac"]
+    outcomes = _group(session, items, executions)
+    run_id = session.scalar(select(RawEvent.id).where(RawEvent.event_id == "dep-2"))
+    counts = [o[1] for o in outcomes[1:]]
+    assert {c["run"] for c in counts} == {run_id}, counts
+    assert _stored_answers(session, "late") == {c["event_id"]: c for c in counts}
