@@ -12,7 +12,10 @@ from core.models import Car, Device
 from identification import manchester, time_pulse, wheel_marks
 from identification.rules import agreed_number
 from ingest.handlers import Derivation
-from service.clearance import service
+from service.clearance import (
+    readings_insert,  # noqa: F401  (its flush hook writes readings)
+    service,
+)
 from service.clearance.attribution import placement_at
 from service.clearance.models import AxleReading, CarPassage, EotReport, WheelMarking
 
