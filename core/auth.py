@@ -157,6 +157,10 @@ def get_principal(
             raise Unauthorized("the X-Device-Key is not known; register the device to get a key")
         if device.decommissioned_at is not None:
             raise Unauthorized(f"device {device.id} is decommissioned; its events are refused")
+        # The request may now read its body slowly (an image over a GPRS link): the look-up's
+        # transaction ends here, so that no pooled connection waits with it (an independent
+        # trial: 35 stalled uploads took every connection, and other devices got 503).
+        session.commit()
         return Principal(role="device", name=device.id, device=device)
     raise Unauthorized("credentials required: 'Authorization: Bearer <token>' or 'X-Device-Key'")
 

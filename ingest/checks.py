@@ -52,6 +52,11 @@ def _parse_schema(payload: Any) -> Any:
             "an event must be a JSON object", errors=[{"loc": ["body"], "msg": "not an object"}]
         )
     kind = payload.get("kind")
+    if kind is None:
+        raise Unprocessable(
+            f"the field 'kind' is missing; expected one of {', '.join(EVENT_KINDS)}",
+            errors=[{"loc": ["body", "kind"], "msg": "field required"}],
+        )
     if kind not in EVENT_KINDS:
         raise Unprocessable(
             f"unknown event kind {kind!r}; expected one of {', '.join(EVENT_KINDS)}",

@@ -68,6 +68,12 @@ def read_json(data: bytes, *, what: str = "body") -> Any:
             f"the {what} is not valid JSON ({exc})",
             errors=[{"loc": ["body"], "msg": "invalid JSON"}],
         ) from None
+    except ValueError as exc:  # an integer of more than 4300 digits (Python's own bound)
+        raise Unprocessable(
+            f"the {what} holds a number that cannot be read ({exc}); send numbers of at most"
+            " 4300 digits",
+            errors=[{"loc": ["body"], "msg": "number too long"}],
+        ) from None
     if _SURROGATE_ESCAPE.search(data) and _has_lone_surrogate(parsed):
         raise Unprocessable(
             f"the {what} escapes a lone UTF-16 surrogate (\\ud800–\\udfff without its pair),"

@@ -12,6 +12,7 @@ from fastapi.responses import JSONResponse, Response
 from pydantic import TypeAdapter
 from sqlalchemy.orm import Session
 from starlette.datastructures import UploadFile
+from starlette.requests import ClientDisconnect
 
 from core import metrics
 from core.auth import CurrentDevicePrincipal
@@ -59,11 +60,16 @@ async def _read_limited(request: Request, limit: int) -> bytes:
         raise PayloadTooLarge(f"the body has {declared} bytes; the limit is {limit}")
     chunks: list[bytes] = []
     size = 0
-    async for chunk in request.stream():
-        size += len(chunk)
-        if size > limit:
-            raise PayloadTooLarge(f"the body exceeds the limit of {limit} bytes")
-        chunks.append(chunk)
+    try:
+        async for chunk in request.stream():
+            size += len(chunk)
+            if size > limit:
+                raise PayloadTooLarge(f"the body exceeds the limit of {limit} bytes")
+            chunks.append(chunk)
+    except ClientDisconnect:
+        # Nothing was stored; the device sends the event again. A refusal rather than the
+        # ASGI traceback the server logged for every such request (an independent trial).
+        raise DepotError("the client closed the connection before its body arrived") from None
     return b"".join(chunks)
 
 

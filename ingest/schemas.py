@@ -16,6 +16,7 @@ from pydantic import (
     Field,
     TypeAdapter,
     ValidationError,
+    field_validator,
     model_validator,
 )
 from pydantic_core import InitErrorDetails, PydanticCustomError
@@ -86,6 +87,30 @@ class EventBase(BaseModel):
 
     event_id: EventId
     occurred_at: DeviceTime
+
+    @field_validator("*", mode="after")
+    @classmethod
+    def _text_without_nul(cls, value: Any) -> Any:
+        # PostgreSQL's text cannot hold U+0000: a departure naming train "20\u000041" was
+        # stored but could not be derived, and left its section free (an independent trial).
+        # Refused here, naming the field, on every transport and per item of a batch.
+        if _holds_nul(value):
+            raise PydanticCustomError(
+                "nul_character",
+                "holds a NUL character (U+0000), which cannot be stored; send the text without it",
+            )
+        return value
+
+
+def _holds_nul(value: Any) -> bool:
+    """Whether a field's value (text, or a list or mapping of texts) holds U+0000."""
+    if isinstance(value, str):
+        return "\x00" in value
+    if isinstance(value, dict):
+        return any(_holds_nul(k) or _holds_nul(v) for k, v in value.items())
+    if isinstance(value, list | tuple) and value and isinstance(value[0], str | dict | list):
+        return any(_holds_nul(item) for item in value)
+    return False
 
 
 class SectionEvent(EventBase):

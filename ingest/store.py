@@ -11,7 +11,7 @@ from __future__ import annotations
 import logging
 from typing import Any
 
-from sqlalchemy.exc import InterfaceError, OperationalError, PendingRollbackError
+from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError, PendingRollbackError
 from sqlalchemy.orm import Session
 
 from core.errors import Conflict
@@ -141,8 +141,17 @@ def run_derivation(
     except Exception as exc:
         log.exception("deriving from %s/%s failed", device.id, raw.event_id)
         restore_pending(session, seen)
-        raw.derive_error = f"{type(exc).__name__}: {exc}"
+        raw.derive_error = derive_error_text(exc)
         return {"derive_error": raw.derive_error}
+
+
+def derive_error_text(exc: Exception) -> str:
+    """What a device and the event log are told of a failed derivation: the error's kind and
+    the database's own first line, never the SQL statement and its parameters (which
+    SQLAlchemy appends to its errors, and which are the service's internals)."""
+    orig = exc.orig if isinstance(exc, DBAPIError) else None
+    text = str(orig if orig is not None else exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
 
 
 def accept_event(
