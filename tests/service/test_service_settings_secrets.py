@@ -43,3 +43,12 @@ def test_generated_tokens_are_accepted() -> None:
         for token in (secrets.token_urlsafe(32), secrets.token_hex(16), secrets.token_hex(12)):
             Settings(environment="production", admin_token=token, database_url=PG,
                      metrics_token=secrets.token_urlsafe(24))  # fmt: skip
+
+
+@pytest.mark.parametrize("period", [1.0, 5.0, 19.9])
+def test_a_heartbeat_period_near_the_liveness_step_is_refused(period: float) -> None:
+    """``last_seen_at`` moves in 5 s steps: with a period of 5 s a device heard every second
+    was shown stale every 5 s (an independent trial). The message names the setting."""
+    with pytest.raises(ValidationError) as caught:
+        Settings(heartbeat_s=period)
+    assert "DEPOT_HEARTBEAT_S" in settings_problem(caught.value)
