@@ -28,7 +28,7 @@ from core.settings import get_settings
 from ingest import service
 from ingest.batches import batch_events
 from ingest.commit_queue import committer_for
-from ingest.device_auth import EventDevice
+from ingest.device_auth import EVENT_SECURITY, EventDevice
 from ingest.handlers import prepare
 from ingest.payload import read_json
 from ingest.schemas import BatchResult, EventAck
@@ -38,6 +38,7 @@ router = APIRouter(tags=["devices"])
 T = TypeVar("T")
 
 EVENT_BODY_DOC = {
+    "security": EVENT_SECURITY,
     "requestBody": {
         "required": True,
         "content": {
@@ -50,7 +51,7 @@ EVENT_BODY_DOC = {
                 }
             }
         },
-    }
+    },
 }
 
 
