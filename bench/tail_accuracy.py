@@ -40,7 +40,7 @@ model): learned 58.0/14.0/5 false present (electric tail lamps, which generator 
 not draw), guarded 50.0/16.7/0; the AB model's ``present`` threshold (0.995) left the
 clearest disc ``uncertain``.
 
-Run: ``.venv/bin/python -m bench.tail_accuracy [--count N] [--variant NAME ...]``
+Run: ``.venv/bin/python -m bench.tail_accuracy [--count N] [--offset K] [--variant NAME ...]``
 """
 
 from __future__ import annotations
@@ -127,12 +127,17 @@ def _report(
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--count", type=int, default=150, help="held-out scenes per generator")
+    parser.add_argument(
+        "--offset", type=int, default=0, help="first held-out scene (seed 300000 + offset)"
+    )
     parser.add_argument("--variant", nargs="+", default=["baseline", "learned", "guarded"])
     parser.add_argument("--models", nargs="+", default=list(MODELS), help="for the real photos")
     args = parser.parse_args(argv)
     os.environ.setdefault("DEPOT_TAIL_CACHE", "var/tail_cache")
     t0 = time.perf_counter()
-    held = {g: _seen(list(scenes(g, "heldout", args.count))) for g in ("A", "B")}
+    held = {
+        g: _seen(list(scenes(g, "heldout", args.count, offset=args.offset))) for g in ("A", "B")
+    }
     photos = {part: _seen(list(real_photos(part))) for part in ("report", "train")}
     found = sum(len(p) for p in photos.values())
     print(f"scenes and candidates ready in {time.perf_counter() - t0:.0f} s; real photos: {found}")
