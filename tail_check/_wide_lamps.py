@@ -39,7 +39,11 @@ class LampRanges:
 
     Attributes
     ----------
-    lamp_radius : tail lamp lens radius (a small disc is 0.032 of the car width).
+    lamp_radius : tail lamp lens radius. A lens is 0.1-0.17 m across on a car end about
+        3 m wide (radius up to about 0.028 of the width), smaller than a tail disc
+        (0.032-0.07 in :class:`~tail_check._wide_draw.WideRanges`): a red lamp as large
+        as a disc, drawn dark, is a disc without its reflector to any eye, and as a
+        "negative" it alone set the ``present`` threshold above every disc.
     lit_share : share of tail lamps and road lights that are lit (by day and night).
     pair_share : share of tail lamps drawn as a pair at both corners.
     square_share : share of square lenses.
@@ -56,7 +60,7 @@ class LampRanges:
     road_width : width of the road vehicle's rear, fraction of the image width.
     """
 
-    lamp_radius: Range = (0.01, 0.045)
+    lamp_radius: Range = (0.01, 0.028)
     lit_share: float = 0.75
     pair_share: float = 0.55
     square_share: float = 0.3

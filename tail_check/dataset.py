@@ -53,7 +53,7 @@ SPLITS: dict[str, int] = {
 """First seed of each split; scene ``i`` of a split uses seed ``first + i``."""
 WIDE_SPLITS = frozenset({"train", "validation", "heldout_wide"})
 """Splits whose generator-A scenes come from the domain-randomised mode."""
-CACHE_TAGS: dict[tuple[str, bool], str] = {("A", False): "A", ("A", True): "Aw2", ("B", False): "B"}
+CACHE_TAGS: dict[tuple[str, bool], str] = {("A", False): "A", ("A", True): "Aw3", ("B", False): "B"}
 """Cache file prefix per (generator, randomised); a new tag whenever a generator's scenes
 change, so a cache written by an older version is never read as the new one."""
 SIZES_A: tuple[tuple[int, int], ...] = ((640, 480), (800, 600), (1024, 768), (1280, 720))

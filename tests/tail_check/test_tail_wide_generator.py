@@ -104,3 +104,12 @@ def test_lamp_kind_is_checked() -> None:
     img = np.zeros((48, 64, 3), np.float32)
     with pytest.raises(ValueError, match="unknown lamp"):
         draw_lamp(np.random.default_rng(0), img, CarGeometry(0, 60, 0, 30, 35), "headlight")
+
+
+def test_a_tail_lamp_is_smaller_than_the_smallest_disc() -> None:
+    """A dark red lamp as large as a disc is a disc without its reflector to any eye; as
+    a negative it set the verifier's `present` threshold above every disc."""
+    from tail_check._wide_draw import WIDE
+    from tail_check._wide_lamps import LAMPS
+
+    assert LAMPS.lamp_radius[1] < WIDE.disc_radius[0]
