@@ -51,6 +51,8 @@ class WideRanges:
         the next car behind it).
     lift : the disc centre sits this many radii above the beam's top edge.
     pole_share, pole_cover : a pole in front of the disc and the share it hides.
+    lamp_share : share of scenes with a lamp (tail lamp, signal, road vehicle's lights,
+        :mod:`tail_check._wide_lamps`) besides the drawn hard negatives.
     clump_share, clump_cover : snow stuck on the disc (snow scenes) and its size.
     dusk_gain : extra exposure factor at dusk (small discs nearly black).
     white_balance : per-channel gain range of the camera's white balance.
@@ -86,6 +88,7 @@ class WideRanges:
     protrude_share: float = 0.3
     lift: Range = (-0.2, 1.6)
     pole_share: float = 0.12
+    lamp_share: float = 0.3
     pole_cover: Range = (0.1, 0.5)
     clump_share: float = 0.35
     clump_cover: Range = (0.15, 0.45)

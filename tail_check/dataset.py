@@ -2,7 +2,12 @@
 
 Generator A is :mod:`tail_check.synth`, generator B :mod:`tail_check.scenes_b`
 (written independently). Seeds are split into named ranges so that training,
-validation and held-out evaluation never share a scene. Rendered scenes can be
+validation and held-out evaluation never share a scene. Generator A's ``train`` and
+``validation`` scenes come from its domain-randomised mode (:mod:`tail_check.synth_wide`:
+every paint, size, turn and light widened, lamps and lettering among the hard
+negatives), its ``heldout`` scenes from the reference generator the hand-tuned
+detector is measured on (``heldout_wide``: the randomised mode's held-out seeds), so
+a verifier trained on A is judged on scenes it was not drawn from either. Rendered scenes can be
 cached as lossless PNG (the image already went through the generator's JPEG
 round trip, so the cache is exact) because generator B takes seconds per scene.
 
@@ -26,6 +31,7 @@ from numpy.typing import NDArray
 
 from . import synth
 from .scenes_b import render_scene
+from .synth_wide import random_wide_snapshot
 
 __all__ = [
     "GENERATORS",
@@ -38,8 +44,18 @@ __all__ = [
 
 Generator = Literal["A", "B"]
 GENERATORS: tuple[Generator, ...] = ("A", "B")
-SPLITS: dict[str, int] = {"train": 100_000, "validation": 200_000, "heldout": 300_000}
+SPLITS: dict[str, int] = {
+    "train": 100_000,
+    "validation": 200_000,
+    "heldout": 300_000,
+    "heldout_wide": 300_000,
+}
 """First seed of each split; scene ``i`` of a split uses seed ``first + i``."""
+WIDE_SPLITS = frozenset({"train", "validation", "heldout_wide"})
+"""Splits whose generator-A scenes come from the domain-randomised mode."""
+CACHE_TAGS: dict[tuple[str, bool], str] = {("A", False): "A", ("A", True): "Aw3", ("B", False): "B"}
+"""Cache file prefix per (generator, randomised); a new tag whenever a generator's scenes
+change, so a cache written by an older version is never read as the new one."""
 SIZES_A: tuple[tuple[int, int], ...] = ((640, 480), (800, 600), (1024, 768), (1280, 720))
 """Sizes drawn for generator A (it renders one size per call)."""
 SIZE_B = (640, 480)
@@ -80,10 +96,11 @@ class Sample:
     bbox: tuple[int, int, int, int] | None = None
 
 
-def _scene_a(seed: int) -> Sample:
+def _scene_a(seed: int, wide: bool = False) -> Sample:
     rng = np.random.default_rng(seed)
     size = SIZES_A[int(rng.integers(len(SIZES_A)))]
-    image, label = synth.random_snapshot(rng, size=size)
+    draw = random_wide_snapshot if wide else synth.random_snapshot
+    image, label = draw(rng, size=size)
     kind = "disc" if label.disc else (label.distractors[0] if label.distractors else "none")
     return Sample(image, label.disc, label.condition, kind, "A", str(seed), label.bbox)
 
@@ -99,12 +116,17 @@ def _cache_dir() -> Path | None:
     return Path(text) if text else None
 
 
-def _cached(generator: Generator, seed: int) -> Sample:
-    render = _scene_a if generator == "A" else _scene_b
+def _cached(generator: Generator, seed: int, wide: bool = False) -> Sample:
+    wide = wide and generator == "A"
+
+    def render(seed: int) -> Sample:
+        return _scene_a(seed, wide) if generator == "A" else _scene_b(seed)
+
     cache = _cache_dir()
     if cache is None:
         return render(seed)
-    png, meta = cache / f"{generator}_{seed}.png", cache / f"{generator}_{seed}.json"
+    tag = CACHE_TAGS[(generator, wide)]
+    png, meta = cache / f"{tag}_{seed}.png", cache / f"{tag}_{seed}.json"
     if png.is_file() and meta.is_file():
         image = cv2.imread(str(png), cv2.IMREAD_COLOR)
         info = json.loads(meta.read_text(encoding="utf-8"))
@@ -148,7 +170,7 @@ def scenes(generator: Generator, split: str, count: int, *, offset: int = 0) -> 
         raise ValueError(f"count and offset must be non-negative, got {count}, {offset}")
     first = SPLITS[split] + offset
     for seed in range(first, first + count):
-        yield _cached(generator, seed)
+        yield _cached(generator, seed, split in WIDE_SPLITS)
 
 
 def real_dir() -> Path:

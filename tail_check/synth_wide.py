@@ -29,25 +29,32 @@ from ._wide_draw import (
     red_paint,
     snow_clump,
 )
+from ._wide_lamps import LAMP_KINDS, Emitter, draw_lamp, emit
 from .synth import _CONDITION_WEIGHTS, _SKY, CONDITIONS, SnapshotLabel, _camera, _label, _light
 from .synth import _occlude as _pole
 
 __all__ = ["WIDE_DISTRACTORS", "random_wide_snapshot"]
 
-WIDE_DISTRACTORS = (*DISTRACTORS, "red_lettering", "red_barrier")
+WIDE_DISTRACTORS = (*DISTRACTORS, "red_lettering", "red_barrier", *LAMP_KINDS)
 _DISTRACTOR_COUNTS = ((0, 1, 2), (0.35, 0.45, 0.2))
 
 
-def _distract(rng: np.random.Generator, img: NDArray[np.float32], geo: object, kind: str) -> None:
+def _distract(
+    rng: np.random.Generator, img: NDArray[np.float32], geo: object, kind: str
+) -> list[Emitter]:
+    """Draw one hard negative; the lit lenses whose light is added after the lighting."""
     from ._scene import CarGeometry
 
     assert isinstance(geo, CarGeometry)
+    if kind in LAMP_KINDS:
+        return draw_lamp(rng, img, geo, kind)
     if kind == "red_lettering":
         draw_lettering(rng, img, geo)
     elif kind == "red_barrier":
         draw_barrier(rng, img, geo)
     else:
         draw_distractor(rng, img, geo, kind, red_paint(rng))
+    return []
 
 
 def _expose(rng: np.random.Generator, img: NDArray[np.float32], c: WideRanges) -> None:
@@ -76,10 +83,12 @@ def random_wide_snapshot(
     counts, weights = _DISTRACTOR_COUNTS
     n = int(rng.choice(counts, p=weights))
     kinds = tuple(str(k) for k in rng.choice(WIDE_DISTRACTORS, n, replace=False))
+    if rng.random() < c.lamp_share:
+        lamp = str(rng.choice(LAMP_KINDS))
+        kinds = kinds if lamp in kinds else (*kinds, lamp)
     img = background(rng, h, w, _SKY[condition])
     geo = draw_car(rng, img, paint, width=c.car_width)
-    for kind in kinds:
-        _distract(rng, img, geo, kind)
+    lit = [e for kind in kinds for e in _distract(rng, img, geo, kind)]
     mask = np.zeros((h, w), bool)
     drawn = draw_disc_wide(rng, img, geo, c) if disc else None
     if drawn is not None:
@@ -89,6 +98,7 @@ def random_wide_snapshot(
         img *= np.float32(rng.uniform(*c.dusk_gain))
     if condition == "night" and drawn is not None:
         img = add_glow(rng, img, drawn, c)
+    img = emit(img, lit)
     visible = mask
     if drawn is not None and condition == "snow" and rng.random() < c.clump_share:
         visible = visible & ~snow_clump(rng, img, drawn, c)

@@ -7,6 +7,14 @@ defines the zones where colour is compared: inside, the rim just outside the edg
 a ring further out, also per sector (a disc stands out on every side; a stripe or a
 letter stroke does not). No feature uses the position in the image: where a disc sits
 depends on the camera, and position would teach the verifier one generator's layout.
+Position relative to the car is used instead: a disc hangs just above the buffer beam,
+dark below it, while lettering has body paint below and a signal its post.
+
+No feature uses one paint's exact colour (the paper's band share was dropped: it
+memorised one generator's red): colour enters as ratios (redness, chromaticity), as
+the same after a grey-world white balance of the crop, and as contrasts with the
+surroundings. ``in_clipped`` (pixels at the sensor's top) tells an emitting lamp from
+lit paint.
 """
 
 from __future__ import annotations
@@ -50,13 +58,18 @@ FEATURE_NAMES: tuple[str, ...] = (
     "sector_min_contrast",
     "sector_max_contrast",
     "centre_brightness",
-    "in_band_share",
+    "in_redness_wb",
+    "redness_wb_contrast",
+    "in_clipped",
+    "ring_clipped",
+    "below_contrast",
+    "above_below",
+    *(f"{m}_r{i}" for m in ("redness", "value", "chroma") for i in range(6)),
+    *(f"{m}_sector_std_r{i}" for m in ("evidence",) for i in range(6)),
     "response",
     "source",
     "scene_bright",
     "scene_red_share",
-    *(f"{m}_r{i}" for m in ("redness", "value", "chroma") for i in range(6)),
-    *(f"{m}_sector_std_r{i}" for m in ("evidence",) for i in range(6)),
 )
 """Names of the feature vector, in order."""
 
@@ -78,6 +91,8 @@ class FeatureParams:
     red_pixel : redness above which a pixel counts for the scene's red share.
     samples_per_radius : zones of large candidates are sampled on a grid this many
         points per radius (bounded cost at any size).
+    below : the strip under (and, mirrored, over) a candidate, from and to this many
+        radii from its centre, one diameter wide: where the buffer beam would be.
     """
 
     window: float = 2.6
@@ -88,6 +103,7 @@ class FeatureParams:
     sectors: int = 8
     red_pixel: float = 0.35
     samples_per_radius: float = 6.0
+    below: tuple[float, float] = (1.6, 4.0)
 
 
 FEATURE_PARAMS = FeatureParams()
@@ -206,7 +222,7 @@ def _zone_stats(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> li
     centre = zone(0)
     if inner is None or rim is None or outer is None:
         return None
-    red_i, chro_i, val_i, ev_i, band_i, red2_i = inner
+    red_i, chro_i, val_i, ev_i, _band_i, red2_i, wb_i, clip_i = inner
     sec = cells[list(c.outer_rings)].sum(axis=0)  # (sector, channel)
     seen = sec[:, 0] > 0
     per_sector = ev_i - sec[seen, 4] / sec[seen, 0]
@@ -237,12 +253,45 @@ def _zone_stats(m: Maps, cx: float, cy: float, r: float, c: FeatureParams) -> li
         float(per_sector.min()),
         float(per_sector.max()),
         v_centre / max(val_i, 1e-3),
-        band_i,
+        wb_i,
+        wb_i - outer[6],
+        clip_i,
+        outer[7],
         *profile[:, 0].tolist(),
         *profile[:, 2].tolist(),
         *profile[:, 1].tolist(),
         *spread,
     ]
+
+
+def _strip_mean(field: NDArray[np.float32], x0: float, x1: float, y0: float, y1: float) -> float:
+    h, w = field.shape
+    xa, xb = max(0, int(x0)), min(w, int(math.ceil(x1)))
+    ya, yb = max(0, int(y0)), min(h, int(math.ceil(y1)))
+    if xb <= xa or yb <= ya:
+        return float("nan")
+    return float(field[ya:yb, xa:xb].mean())
+
+
+def _beam(
+    m: Maps, cx: float, cy: float, r: float, c: FeatureParams, stats: list[float]
+) -> tuple[float, float]:
+    """(ring value - value below, value above - value below); 0 outside the frame."""
+    lo, hi = c.below
+    below = _strip_mean(m.value, cx - r, cx + r, cy + lo * r, cy + hi * r)
+    above = _strip_mean(m.value, cx - r, cx + r, cy - hi * r, cy - lo * r)
+    ring_value = stats[_RING_VALUE]
+    b = ring_value if math.isnan(below) else below
+    a = ring_value if math.isnan(above) else above
+    return ring_value - b, a - b
+
+
+_RING_VALUE = 7  # index of ring_value in _zone_stats' list
+_BEAM_AT = 21  # where below_contrast goes in _zone_stats' list (after ring_clipped)
+
+
+def _insert_beam(stats: list[float], beam: tuple[float, float]) -> list[float]:
+    return [*stats[:_BEAM_AT], *beam, *stats[_BEAM_AT:]]
 
 
 def describe(
@@ -265,6 +314,7 @@ def describe(
     stats = _zone_stats(m, cx, cy, r, c)
     if stats is None:
         return None
+    stats = _insert_beam(stats, _beam(m, cx, cy, r, c, stats))
     feats = [2 * r / m.work_side, r / pr.r, *shape, *stats]
     feats += [pr.response, float(pr.source), *scene]
     ox, oy = m.origin

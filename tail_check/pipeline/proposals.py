@@ -49,6 +49,9 @@ class ProposalParams:
         Quantile of ``max(R,G,B)`` taken as the crop's bright level (auto exposure).
     min_bright : float
         Floor of that bright level, 0..1 (a black frame is not stretched into noise).
+    clip_level : float
+        Low-passed ``max(R,G,B)`` (0..255) at or above which a pixel counts as clipped:
+        a lamp emits light and saturates the sensor, paint in daylight rarely does.
     value_knee : float
         Normalised value at which ``evidence`` reaches full weight.
     blob_radii : tuple of float
@@ -70,6 +73,7 @@ class ProposalParams:
     work_side: float = 320.0
     bright_quantile: float = 0.99
     min_bright: float = 0.12
+    clip_level: float = 245.0
     value_knee: float = 0.35
     blob_radii: tuple[float, ...] = (0.008, 0.012, 0.018, 0.027, 0.04, 0.06, 0.09)
     centre_sigma: float = 0.7
@@ -114,7 +118,8 @@ class Maps:
     scale: float
     work_side: float
     stack: F32
-    """(h, w, 7): 1, redness, chroma, value, evidence, band, redness² (for zone sums)."""
+    """(h, w, 9): 1, redness, chroma, value, evidence, band, redness², white-balanced
+    redness, clipped (for zone sums)."""
 
 
 @dataclass(frozen=True)
@@ -163,10 +168,34 @@ def make_maps(
     value = np.asarray(np.clip(top / (255.0 * bright), 0.0, 1.0), np.float32)
     evidence = np.asarray(redness * np.clip(value / c.value_knee, 0.0, 1.0), np.float32)
     ones = np.ones_like(redness)
-    stack = np.dstack([ones, redness, chroma, value, evidence, band.astype(np.float32), redness**2])
+    balanced = _grey_world(bgr)
+    wb_top = np.maximum(balanced[..., 1], balanced[..., 0])
+    red_wb = np.clip((balanced[..., 2] - wb_top) / (balanced[..., 2] + EPS), 0.0, 1.0)
+    clipped = (top >= c.clip_level).astype(np.float32)
+    stack = np.dstack(
+        [
+            ones,
+            redness,
+            chroma,
+            value,
+            evidence,
+            band.astype(np.float32),
+            redness**2,
+            red_wb,
+            clipped,
+        ]
+    )
     return Maps(
         bgr, redness, chroma, value, evidence, band, bright, (x, y), scale, c.work_side, stack
     )
+
+
+def _grey_world(bgr: F32) -> F32:
+    """The crop white-balanced by the grey-world rule (each channel's median to their
+    mean): a camera's colour cast or a dusk light does not make every surface redder."""
+    med = np.median(bgr.reshape(-1, 3), axis=0) + EPS
+    gains = (float(med.mean()) / med).astype(np.float32)
+    return np.asarray(bgr * gains[None, None, :], np.float32)
 
 
 def _blobs(m: Maps, c: ProposalParams, lit: bool) -> list[Proposal]:

@@ -8,6 +8,8 @@ import colorsys
 import numpy as np
 import pytest
 
+from tail_check._scene import CarGeometry
+from tail_check._wide_lamps import LAMP_KINDS, LampRanges, draw_lamp, emit
 from tail_check.synth_wide import WIDE_DISTRACTORS, random_wide_snapshot
 
 N = 80
@@ -65,3 +67,49 @@ def test_wide_snapshot_is_reproducible_and_labelled_inside_the_image() -> None:
         if lab.bbox is not None:
             x, y, w, h = lab.bbox
             assert x >= 0 and y >= 0 and x + w <= img.shape[1] and y + h <= img.shape[0]
+
+
+def test_wide_scenes_hold_lamps_as_hard_negatives(wide: list[tuple[np.ndarray, object]]) -> None:
+    """Tail lamps, signals and a road vehicle's lights (issue 11: a verifier trained
+    without them called a lit tail lamp a disc)."""
+    kinds = {k for _, lab in wide for k in lab.distractors}  # type: ignore[attr-defined]
+    assert set(LAMP_KINDS) <= kinds
+    no_disc_lamps = [
+        lab
+        for _, lab in wide
+        if not lab.disc and set(lab.distractors) & set(LAMP_KINDS)  # type: ignore[attr-defined]
+    ]
+    assert len(no_disc_lamps) >= 5
+
+
+@pytest.mark.parametrize("kind", LAMP_KINDS)
+def test_a_lit_lamp_is_red_and_clips_at_its_core(kind: str) -> None:
+    for i in range(40):
+        rng = np.random.default_rng([kind.__len__(), i])
+        img = np.full((480, 640, 3), 0.35, np.float32)
+        geo = CarGeometry(120, 520, 100, 360, 395)
+        lit = draw_lamp(rng, img, geo, kind, LampRanges(lit_share=1.0, signal_red_share=1.0))
+        if lit:
+            break
+    assert lit, "no lit lamp drawn"
+    out = emit(img * np.float32(0.1), lit)  # a night scene: the lamp still shines
+    x, y = lit[0].centre
+    r, g, b = out[y, x]
+    assert r >= 1.0 and r > g and r > b
+    far = out[5, 5]
+    assert float(far.max()) < 0.1
+
+
+def test_lamp_kind_is_checked() -> None:
+    img = np.zeros((48, 64, 3), np.float32)
+    with pytest.raises(ValueError, match="unknown lamp"):
+        draw_lamp(np.random.default_rng(0), img, CarGeometry(0, 60, 0, 30, 35), "headlight")
+
+
+def test_a_tail_lamp_is_smaller_than_the_smallest_disc() -> None:
+    """A dark red lamp as large as a disc is a disc without its reflector to any eye; as
+    a negative it set the verifier's `present` threshold above every disc."""
+    from tail_check._wide_draw import WIDE
+    from tail_check._wide_lamps import LAMPS
+
+    assert LAMPS.lamp_radius[1] < WIDE.disc_radius[0]
