@@ -121,3 +121,16 @@ def test_real_photos_are_split_in_two_disjoint_halves() -> None:
     assert abs(len(report) - len(train)) <= len(("railsem19_frames", "red_wagons"))
     with pytest.raises(ValueError, match="part"):
         next(real_photos("test"))  # type: ignore[arg-type]
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="known false present of the hand-tuned detector (the service's) on generator B's"
+    " fresh held-out seeds: a lit signal head beside the track and a lit electric tail lamp"
+    " mid-body, both at dusk, are called discs (found by the tail-accuracy helper, issue 11)",
+)
+@pytest.mark.parametrize(("seed", "kind"), [(300498, "signal_light"), (300535, "tail_lamp")])
+def test_hand_tuned_detector_never_calls_a_lit_lamp_a_disc(seed: int, kind: str) -> None:
+    sample = next(scenes("B", "heldout", 1, offset=seed - 300000))
+    assert not sample.disc and sample.kind == kind and sample.condition == "dusk"
+    assert detect(sample.image).verdict != "present"
