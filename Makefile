@@ -38,8 +38,12 @@ lint: $(STAMP)
 	$(VENV)/bin/mypy $(TYPED)
 	$(VENV)/bin/lint-imports
 
+# Two workers (the machine has two cores; many tests wait on servers and brokers); each file's
+# tests stay on one worker, each worker has its own databases (tests/conftest.py).
+# `make test PYTEST_WORKERS=0` runs in one process.
+PYTEST_WORKERS ?= 2
 test: lint
-	$(VENV)/bin/pytest $(PYTEST_ARGS)
+	$(VENV)/bin/pytest -n $(PYTEST_WORKERS) --dist loadgroup $(PYTEST_ARGS)
 
 bench: $(STAMP)
 	@for b in bench/[!_]*.py; do m=$$(basename $$b .py); echo "== bench.$$m"; $(PY) -m bench.$$m || exit 1; done
