@@ -18,8 +18,25 @@ from core.settings import get_settings
 from service.migrate import upgrade
 
 ADMIN_TOKEN = "test-admin-token-0123456789abcdef"
-POSTGRES_URL = os.environ.get("DEPOT_TEST_POSTGRES_URL")
+# Under pytest-xdist (``make test`` runs two workers) each worker has its own database,
+# ``<DEPOT_TEST_POSTGRES_URL's database>_gw<n>``: the schema is dropped and migrated per worker.
+_WORKER = os.environ.get("PYTEST_XDIST_WORKER")
+_GIVEN_URL = os.environ.get("DEPOT_TEST_POSTGRES_URL")
+POSTGRES_URL = f"{_GIVEN_URL}_{_WORKER}" if _GIVEN_URL and _WORKER else _GIVEN_URL
 BACKENDS = ["sqlite", pytest.param("postgresql", marks=pytest.mark.postgresql)]
+# Test packages whose tests share one line in file order (a package-scoped fixture): one worker.
+_ONE_WORKER_PACKAGES = ("transports",)
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """With ``--dist loadgroup`` a file's tests stay on one worker (its module fixtures are
+    built once) and so does each package in ``_ONE_WORKER_PACKAGES``."""
+    if not config.pluginmanager.hasplugin("xdist"):
+        return
+    for item in items:
+        relative = Path(str(item.path)).relative_to(Path(__file__).parent)
+        group = relative.parts[0] if relative.parts[0] in _ONE_WORKER_PACKAGES else str(relative)
+        item.add_marker(pytest.mark.xdist_group(group))
 
 
 @pytest.fixture(scope="session")
@@ -37,7 +54,23 @@ def _settings(data_dir: Path) -> Iterator[None]:
     get_settings.cache_clear()
 
 
+def _worker_database(url: str, *, drop: bool = False) -> None:
+    """Create (or drop) this xdist worker's own database on the server of ``url``."""
+    server, name = url.rsplit("/", 1)
+    admin = make_engine(f"{server}/postgres").execution_options(isolation_level="AUTOCOMMIT")
+    with admin.connect() as connection:
+        if drop:
+            connection.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
+        elif not connection.scalar(
+            text("SELECT 1 FROM pg_database WHERE datname = :name"), {"name": name}
+        ):
+            connection.execute(text(f'CREATE DATABASE "{name}"'))
+    admin.dispose()
+
+
 def _fresh_postgres(url: str) -> None:
+    if _WORKER:
+        _worker_database(url)
     engine = make_engine(url)
     with engine.begin() as connection:
         connection.execute(text("DROP SCHEMA public CASCADE"))
@@ -59,6 +92,8 @@ def engine(request: pytest.FixtureRequest, data_dir: Path) -> Iterator[Engine]:
     engine = make_engine(url)
     yield engine
     engine.dispose()
+    if request.param == "postgresql" and _WORKER:
+        _worker_database(url, drop=True)
 
 
 @pytest.fixture
