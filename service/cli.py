@@ -170,9 +170,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_parser(
         "migrate", help="bring the database schema to the latest migration"
     ).set_defaults(func=_migrate)
-    user = sub.add_parser("user", help="manage people's tokens").add_subparsers(
-        dest="user_command", metavar="ACTION"
-    )
+    user_parser = sub.add_parser("user", help="manage people's tokens")
+    user_parser.set_defaults(action_group=user_parser)
+    user = user_parser.add_subparsers(dest="user_command", metavar="ACTION")
     add = user.add_parser("add", help="add a person; prints their token once")
     add.add_argument(
         "name",
@@ -205,6 +205,7 @@ def build_parser() -> argparse.ArgumentParser:
     revoke.add_argument("name", help="the person whose token stops working")
     revoke.set_defaults(func=_user_revoke)
     device = sub.add_parser("device", help="rotate a device key or decommission a device")
+    device.set_defaults(action_group=device)
     device_sub = device.add_subparsers(dest="device_command", metavar="ACTION")
     for action, func, text in (
         ("key", _device_key, "a new key for DEVICE (prints it once; the old one stops)"),
@@ -230,6 +231,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if not hasattr(args, "func"):
+        group = getattr(args, "action_group", None)
+        if group is not None:
+            return _missing_action(group)
         parser.print_help()
         return 2
     try:
@@ -249,6 +253,19 @@ def main(argv: Sequence[str] | None = None) -> int:
             " (postgresql+psycopg://USER@HOST/DB, or unset for SQLite under DEPOT_DATA_DIR)"
             " and that it is migrated (depot migrate)"
         )
+
+
+def _missing_action(group: argparse.ArgumentParser) -> int:
+    """``depot user`` alone: that command's help (not the top level's) and what is missing."""
+    group.print_help(sys.stderr)
+    actions = [
+        name
+        for action in group._actions
+        if isinstance(action, argparse._SubParsersAction)
+        for name in action.choices
+    ]
+    command = group.prog.removeprefix("depot").strip()
+    return fail(f"{command}: name an ACTION: {', '.join(actions)}")
 
 
 def settings_problem(exc: ValidationError) -> str:
