@@ -119,8 +119,14 @@ def test_a_car_s_codes_are_numbers_within_the_fleet_s_range(client: TestClient) 
 
     top = 2**RULES.zones_per_axle - 1
     for n, (field, value) in enumerate(
-        [("wheel_code", top + 1), ("wheel_code", -1), ("wheel_code", "7"),
-         ("wheel_code", True), ("ir_number", "7"), ("axles", "4")]  # fmt: skip
+        [
+            ("wheel_code", top + 1),
+            ("wheel_code", -1),
+            ("wheel_code", "7"),
+            ("wheel_code", True),
+            ("ir_number", "7"),
+            ("axles", "4"),
+        ]  # fmt: skip
     ):
         body = {"id": f"09{n}", field: value}
         answer = client.post("/api/v1/cars", json=body, headers=ADMIN)
