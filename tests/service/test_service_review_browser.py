@@ -195,7 +195,7 @@ def test_the_queue_is_the_first_thing_seen_on_a_long_line(tmp_path: Path) -> Non
             expect(item).to_be_visible()
             box = item.bounding_box()
             assert box is not None
-            assert 0 <= box["y"] and box["y"] + box["height"] <= FOLD_PX, box
+            assert box["y"] >= 0 and box["y"] + box["height"] <= FOLD_PX, box
             heading = page.locator("#frag-queue h2")
             expect(heading).to_contain_text("most urgent first")
             expect(heading).not_to_contain_text("oldest first")
