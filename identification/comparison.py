@@ -169,11 +169,35 @@ def _extra_words(t: _Tally, dep: list[str | None]) -> list[str]:
     return words
 
 
+def _unidentified_words(t: _Tally, paired: list[int]) -> list[str]:
+    """Paired positions with an unidentified car, naming the side that lacked it ("not
+    identified on both sides" was read as "on neither" or "on one": an independent trial)."""
+    rows = [r for r in t.rows if r[2] != "extra"]  # one per departure position, in order
+    sides: dict[str, list[int]] = {"departure": [], "arrival": [], "neither": []}
+    for p in paired:
+        dep, arr, _ = rows[p - 1]
+        sides[
+            "neither" if dep is None and arr is None else "arrival" if dep else "departure"
+        ].append(p)
+    words = []
+    for p in sides["departure"]:
+        words.append(
+            f"departure {_ranges([p])} not identified at departure (arrival: car {rows[p - 1][1]})"
+        )
+    for p in sides["arrival"]:
+        words.append(
+            f"departure {_ranges([p])} not identified on arrival (departure: car {rows[p - 1][0]})"
+        )
+    if sides["neither"]:
+        words.append(f"departure {_ranges(sides['neither'])} identified on neither side")
+    return words
+
+
 def _unknown_words(t: _Tally, arr: list[str | None]) -> list[str]:
     known_arr = {a for a in arr if a is not None}
     unproven_pos = {p for p, _ in t.unproven}
     paired = [p for p in t.unknown if p not in unproven_pos]
-    words = [f"departure {_ranges(paired)} not identified on both sides"] if paired else []
+    words = _unidentified_words(t, paired)
     for p, c in t.unproven:
         where = f"{_cars([c])} (departure {_ranges([p])})"
         if c is not None and c in known_arr:

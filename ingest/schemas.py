@@ -155,11 +155,27 @@ class IrPulses(SectionEvent):
     query_times_us: Annotated[list[Microseconds], Field(max_length=100_000)] | None = None
 
 
+def _no_booleans(value: object) -> object:
+    """A Manchester sample is the JSON number 0 or 1: ``true`` equals 1 in Python, so the
+    ``Literal[0, 1]`` check alone read it as a sample (an independent trial). One pass over
+    the types in C (a passage may hold a million samples); the index only when one is wrong."""
+    if isinstance(value, list) and bool in set(map(type, value)):
+        index = next(i for i, sample in enumerate(value) if isinstance(sample, bool))
+        raise PydanticCustomError(
+            "sample_type",
+            "sample {index} is {found}: a sample is the number 0 or 1",
+            {"index": index, "found": "true" if value[index] else "false"},
+        )
+    return value
+
+
 class IrManchester(SectionEvent):
     kind: Literal["ir_manchester"]
     senders = frozenset({"ir_reader"})
     samples_per_bit: Annotated[Integer, Field(ge=2, le=1024)]
-    samples: Annotated[list[Literal[0, 1]], Field(max_length=1_000_000)]
+    samples: Annotated[
+        list[Literal[0, 1]], BeforeValidator(_no_booleans), Field(max_length=1_000_000)
+    ]
 
 
 class WheelMarks(SectionEvent):

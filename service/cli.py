@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from datetime import datetime
 
 from pydantic import ValidationError
+from sqlalchemy.engine import make_url
 from sqlalchemy.exc import ArgumentError, IntegrityError, NoSuchModuleError, OperationalError
 
 from core.database import get_sessionmaker, utcnow
@@ -24,9 +25,45 @@ WORKERS = number(int, low=1, high=64)
 LIFETIME = number(low=0, high=3650, low_open=True)  # days, as the API's expires_in_days
 
 
+# The databases depot runs on (backend, SQLAlchemy driver); anything else has no driver
+# installed, or no tested schema, and must be refused with the fix, not with a traceback.
+DATABASES = (("sqlite", "pysqlite"), ("postgresql", "psycopg"))
+DATABASE_FIX = "use postgresql+psycopg://USER@HOST/DB, or unset it for SQLite under DEPOT_DATA_DIR"
+
+
+class UnsupportedDatabase(Exception):
+    """The configured database is not one depot runs on (the message says which and why)."""
+
+
+def database_problem() -> str | None:
+    """Why the configured database cannot be used, in words, when its URL names a database
+    (or driver) depot does not support; None when it is supported or not a URL at all (a
+    URL that does not parse is reported where it is used)."""
+    url = get_settings().resolved_database_url
+    try:
+        parsed = make_url(url)
+        kind = (parsed.get_backend_name(), parsed.get_driver_name())
+    except (ArgumentError, NoSuchModuleError):
+        return None
+    if kind in DATABASES:
+        return None
+    return (
+        f"the database cannot be used: DEPOT_DATABASE_URL names {kind[0]} (driver {kind[1]}),"
+        f" which is not supported; {DATABASE_FIX}"
+    )
+
+
+def _usable_database() -> None:
+    """Stop before a server or a migration starts on a database depot does not support."""
+    problem = database_problem()
+    if problem is not None:
+        raise UnsupportedDatabase(problem)
+
+
 def _serve(args: argparse.Namespace) -> int:
     import uvicorn
 
+    _usable_database()
     settings = get_settings()
     if args.migrate:
         _migrate(args)
@@ -50,6 +87,7 @@ def _serve(args: argparse.Namespace) -> int:
 def _migrate(_: argparse.Namespace) -> int:
     from service.migrate import upgrade
 
+    _usable_database()
     settings = get_settings()
     settings.data_dir.mkdir(parents=True, exist_ok=True)
     upgrade(settings.resolved_database_url)
@@ -171,9 +209,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_parser(
         "migrate", help="bring the database schema to the latest migration"
     ).set_defaults(func=_migrate)
-    user = sub.add_parser("user", help="manage people's tokens").add_subparsers(
-        dest="user_command", metavar="ACTION"
-    )
+    user_parser = sub.add_parser("user", help="manage people's tokens")
+    user_parser.set_defaults(action_group=user_parser)
+    user = user_parser.add_subparsers(dest="user_command", metavar="ACTION")
     add = user.add_parser("add", help="add a person; prints their token once")
     add.add_argument(
         "name",
@@ -206,6 +244,7 @@ def build_parser() -> argparse.ArgumentParser:
     revoke.add_argument("name", help="the person whose token stops working")
     revoke.set_defaults(func=_user_revoke)
     device = sub.add_parser("device", help="rotate a device key or decommission a device")
+    device.set_defaults(action_group=device)
     device_sub = device.add_subparsers(dest="device_command", metavar="ACTION")
     for action, func, text in (
         ("key", _device_key, "a new key for DEVICE (prints it once; the old one stops)"),
@@ -231,10 +270,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if not hasattr(args, "func"):
+        group = getattr(args, "action_group", None)
+        if group is not None:
+            return _missing_action(group)
         parser.print_help()
         return 2
     try:
         return int(args.func(args))
+    except UnsupportedDatabase as exc:
+        return fail(str(exc))
     except DepotError as exc:
         return fail(exc.detail)
     except IntegrityError as exc:
@@ -243,13 +287,32 @@ def main(argv: Sequence[str] | None = None) -> int:
         if exc.title != "Settings":
             raise
         return fail(settings_problem(exc))
-    except (OperationalError, NoSuchModuleError, ArgumentError) as exc:
+    except (OperationalError, NoSuchModuleError, ArgumentError, ImportError) as exc:
+        # an unsupported URL fails wherever its engine is made (no driver: ImportError)
+        problem = database_problem()
+        if problem is not None:
+            return fail(problem)
+        if isinstance(exc, ImportError):
+            raise
         first = str(getattr(exc, "orig", None) or exc).strip().splitlines()[0]
         return fail(
             f"the database cannot be used ({first}); check DEPOT_DATABASE_URL"
             " (postgresql+psycopg://USER@HOST/DB, or unset for SQLite under DEPOT_DATA_DIR)"
             " and that it is migrated (depot migrate)"
         )
+
+
+def _missing_action(group: argparse.ArgumentParser) -> int:
+    """``depot user`` alone: that command's help (not the top level's) and what is missing."""
+    group.print_help(sys.stderr)
+    actions = [
+        name
+        for action in group._actions
+        if isinstance(action, argparse._SubParsersAction)
+        for name in action.choices
+    ]
+    command = group.prog.removeprefix("depot").strip()
+    return fail(f"{command}: name an ACTION: {', '.join(actions)}")
 
 
 def settings_problem(exc: ValidationError) -> str:

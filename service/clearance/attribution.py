@@ -5,7 +5,7 @@ section that was not cleared (a conflict), and events reach depot in any order. 
 the order they are tried (the first that finds a run decides):
 
 1. A departure-side device (at the run's ``from_station``) sees a train around its departure:
-   from :attr:`AttachmentWindows.before_departure` before to
+   from :attr:`AttachmentWindows.adopt_before_departure` before to
    :attr:`AttachmentWindows.after_departure` after it, never after its arrival. Of several
    such departures the nearest in time owns it — except that evidence dated *before* a
    departure is never taken from a train that holds the section at the station then (the
@@ -48,9 +48,19 @@ class AttachmentWindows:
 
     Attributes
     ----------
-    before_departure, after_departure
+    adopt_before_departure, after_departure
         Readers, counters and cameras at the departure station see the train while it leaves:
-        this long before and after the interlocking reports the departure.
+        this long before and after the interlocking reports the departure, and such evidence
+        is the run's. Before the departure the train does not hold the section yet (protocol.md:
+        evidence belongs to the run occupying the section at ``occurred_at``), so only clock
+        differences of seconds are allowed, as after an arrival; longer, and the reads could be
+        the previous train's or a shunting move's (an independent trial: reads dated 3 min
+        before a departure made a false alarm).
+    before_departure
+        Evidence dated up to this long before a departure may still be that train's (a device
+        clock behind, a reader before the departure signal) but is not adopted: a doubt for the
+        run, never proof (``certainty``). Also how long before a departure was received the
+        server may receive the train's evidence.
     after_arrival
         An arrival-side report dated after the arrival belongs to that train only this long
         after it (device clocks differ by seconds; the tail passes the camera before the
@@ -66,6 +76,7 @@ class AttachmentWindows:
         its device's clock wrong (a clock behind has no bound): a person must look.
     """
 
+    adopt_before_departure: timedelta = timedelta(seconds=60)
     before_departure: timedelta = timedelta(minutes=10)
     after_departure: timedelta = timedelta(minutes=10)
     after_arrival: timedelta = timedelta(seconds=60)
@@ -120,11 +131,15 @@ def _in_run(run: Run, at: datetime, slack: timedelta) -> bool:
 def _departing(
     candidates: Sequence[Run], at: datetime, station: str, slack: timedelta, holding: bool
 ) -> list[Run]:
+    """The departures from ``station`` that evidence dated ``at`` fits: adopted (no
+    ``slack``), or possible with a device clock wrong (``slack``: ahead by that much, or behind
+    by up to :attr:`AttachmentWindows.before_departure`)."""
+    before = WINDOWS.before_departure if slack else WINDOWS.adopt_before_departure
     return [
         r
         for r in candidates
         if r.from_station == station
-        and -WINDOWS.before_departure <= at - r.departed_at <= WINDOWS.after_departure + slack
+        and -before <= at - r.departed_at <= WINDOWS.after_departure + slack
         and _in_run(r, at, REACH_AFTER_ARRIVAL if slack else timedelta(0))
         and (r.departed_at <= at or not holding)
     ]

@@ -28,7 +28,14 @@ def _profile(path: str | None) -> CameraProfile:
 
 
 def _read_image(path: str) -> np.ndarray:
-    image = cv2.imread(path, cv2.IMREAD_COLOR)
+    # OpenCV logs its own WARN line to stderr for a file it cannot open; depot's message below
+    # says the same with the fix, so OpenCV is silenced for this read only.
+    level = cv2.utils.logging.getLogLevel()
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    try:
+        image = cv2.imread(path, cv2.IMREAD_COLOR)
+    finally:
+        cv2.utils.logging.setLogLevel(level)
     if image is None:
         raise ValueError(f"cannot read image {path!r} (missing, or not a JPEG/PNG file)")
     return np.asarray(image, dtype=np.uint8)

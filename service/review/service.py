@@ -272,17 +272,38 @@ def build_screen(
     )
 
 
+# A read number no registered car has is shown as "#250" (``clearance.evidence``); a car id
+# never starts with "#" (``setup.names.NAME_PATTERN``).
+UNREGISTERED = "#"
+
+
+def _unregistered(label: str | None) -> bool:
+    return label is not None and label.startswith(UNREGISTERED)
+
+
 def aligned_rows(run: dict[str, Any]) -> list[dict[str, Any]]:
-    """Consists car by car for display, one table per reader technology."""
+    """Consists car by car for display, one table per reader technology, with the numbers
+    read that are not in the fleet register (an independent trial: #250 on both sides passed
+    ``complete`` with nothing said; the verdict stands, the screen names the car)."""
     tables = []
     for family, comparison in sorted(run["evidence"].get("consist_comparison", {}).items()):
-        rows = [{"departure": r[0], "arrival": r[1], "mark": r[2]} for r in comparison["aligned"]]
+        rows = [
+            {
+                "departure": r[0],
+                "arrival": r[1],
+                "mark": r[2],
+                "unregistered": _unregistered(r[0]) or _unregistered(r[1]),
+            }
+            for r in comparison["aligned"]
+        ]
+        strangers = {c for r in comparison["aligned"] for c in r[:2] if _unregistered(c)}
         tables.append(
             {
                 "family": {"wheel": "wheel marks", "ir": "infrared"}.get(family, family),
                 "status": comparison["status"],
                 "status_words": CONSIST_WORDS.get(comparison["status"], comparison["status"]),
                 "rows": rows,
+                "unregistered": sorted(strangers),
             }
         )
     return tables

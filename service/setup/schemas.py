@@ -8,6 +8,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validat
 
 from core.models import DEVICE_KINDS
 from core.schemas import Instant, StrictModel
+from identification.rules import RULES
 from service.setup.names import DEVICE_ID, IDENTIFIER, NAME_PATTERN, PERSON_NAME, person_name
 
 # One rule (names.py) for the API and for the services the CLI calls.
@@ -83,11 +84,32 @@ class DeviceCreated(DeviceOut):
     key: str = Field(description="the device key; shown once, store it on the device")
 
 
+# The codes a wheel mark can carry: ``zones_per_axle`` bits in the duplicate layout the service
+# decodes (identification.md §2); a larger code could never be read, so the car would never be
+# identified by its wheels (an independent trial registered 300).
+WHEEL_CODES = 2**RULES.zones_per_axle
+
+
 class CarIn(StrictModel):
+    """A car of the fleet register. Its numbers must come as JSON numbers (strict: "7" or
+    true is refused, never read as 7 or 1)."""
+
     id: Identifier
-    wheel_code: Annotated[int, Field(ge=0, le=2**32)] | None = None
-    ir_number: Annotated[int, Field(ge=0, le=2**32)] | None = None
-    axles: Annotated[int, Field(ge=2, le=32)] = 4
+    wheel_code: (
+        Annotated[
+            int,
+            Field(
+                strict=True,
+                ge=0,
+                lt=WHEEL_CODES,
+                description=f"the code written on its wheels: 0–{WHEEL_CODES - 1}"
+                f" ({RULES.zones_per_axle} mark zones per axle)",
+            ),
+        ]
+        | None
+    ) = None
+    ir_number: Annotated[int, Field(strict=True, ge=0, le=2**32)] | None = None
+    axles: Annotated[int, Field(strict=True, ge=2, le=32)] = 4
 
 
 class CarOut(BaseModel):

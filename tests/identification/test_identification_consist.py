@@ -147,3 +147,21 @@ def test_axle_sum_and_compare_axles() -> None:
     assert "8 missing" in fewer.reason
     assert compare_axles(212, 216).status == "more"
     assert compare_axles(None, 216).status == "unknown"
+
+
+def test_an_unidentified_position_says_which_side_lacked_the_identification() -> None:
+    """An independent trial: "departure position 2 not identified on both sides" read as
+    "on neither side" or "on one of them". The reason names the side that lacked it."""
+    departure_only = compare_consists(["a", None, "c"], ["a", "b", "c"])
+    assert (
+        "departure position 2 not identified at departure (arrival: car b)" in departure_only.reason
+    )
+    arrival_only = compare_consists(["a", "b", "c"], ["a", None, "c"])
+    assert (
+        "departure position 2 not identified on arrival (departure: car b)" in arrival_only.reason
+    )
+    neither = compare_consists(["a", None, "c"], ["a", None, "c"])
+    assert "departure position 2 identified on neither side" in neither.reason
+    for r in (departure_only, arrival_only, neither):
+        assert "both sides" not in r.reason, r.reason
+        assert r.status == "unknown" and r.unknown_positions == [2]

@@ -89,3 +89,44 @@ def test_a_late_departure_takes_its_photo_back_from_the_earlier_run(
     answer = line.arrive(ARRIVED + timedelta(seconds=40), train="2043")
     assert answer["run"] == r2, answer
     assert run_of(line, r2)["evidence"]["snapshot_ids"] == [photo["snapshot"]]
+
+
+def _previous_reads_then_a_short_consist(line: Line) -> dict[str, object]:
+    """Cars 117–120 are read at A 3 min before 2043 departs (a previous train, a shunting
+    move); 2043 itself is read as 117, 118 just before its departure, and reaches B whole."""
+    line.heartbeat_all(T0 - timedelta(minutes=4))
+    line.read("A", [117, 118, 119, 120], T0 - timedelta(minutes=3))
+    line.heartbeat_all(T0 - timedelta(seconds=20))
+    line.read("A", [117, 118], T0 - timedelta(seconds=40))
+    line.depart(T0, train="2043")
+    line.heartbeat_all(ARRIVED - timedelta(seconds=30))
+    line.read("B", [117, 118], ARRIVED - timedelta(seconds=40))
+    line.snapshot("B-cam", ARRIVED - timedelta(seconds=5), jpeg(disc=True, seed=21))
+    return line.arrive(ARRIVED, train="2043")
+
+
+def test_reads_minutes_before_a_departure_are_a_doubt_not_the_trains_consist(
+    line: Line,
+) -> None:
+    """An independent trial: reads dated 3 min before the departure were adopted into the run
+    (a 10 min window), and the train was shown incomplete — a false alarm. They could be the
+    previous train's or this one's with a clock behind: a person must look, nothing proven."""
+    answer = _previous_reads_then_a_short_consist(line)
+    assert answer["verdict"] == "undetermined", answer
+    assert line.section()["state"] == "review", line.section()
+    decided = run_of(line, answer["run"])["decision"]
+    assert not any("lacks" in r for r in decided["reasons"]), decided["reasons"]
+    doubts = [r for r in decided["reasons"] if "A-ir" in r and "cannot be placed" in r]
+    assert len(doubts) == 4, decided["reasons"]
+
+
+def test_reads_seconds_before_a_departure_are_the_trains(line: Line) -> None:
+    """A reader before the departure signal, or clocks seconds apart: still the run's."""
+    line.heartbeat_all(T0 - timedelta(seconds=70))
+    line.read("A", [117, 118], T0 - timedelta(seconds=55))
+    line.depart(T0, train="2043")
+    line.heartbeat_all(ARRIVED - timedelta(seconds=30))
+    line.read("B", [117], ARRIVED - timedelta(seconds=40))
+    line.snapshot("B-cam", ARRIVED - timedelta(seconds=5), jpeg(disc=True, seed=21))
+    answer = line.arrive(ARRIVED, train="2043")
+    assert answer["verdict"] == "incomplete", answer

@@ -170,3 +170,36 @@ def test_a_database_that_cannot_be_used_is_one_clear_line(
     err = capsys.readouterr().err
     assert err.startswith("depot: the database cannot be used") and "DEPOT_DATABASE_URL" in err
     assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("command", [["user", "list"], ["migrate"], ["serve"], ["replay"]])
+@pytest.mark.parametrize("url", ["mysql://depot@db/depot", "oracle+oracledb://depot@db/depot"])
+def test_an_unsupported_database_is_named_with_the_fix(
+    url: str,
+    command: list[str],
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """An independent trial: a mysql:// URL ended in a traceback (no MySQL driver). depot runs
+    on SQLite and PostgreSQL through psycopg: one line names the setting, what it names and
+    the fix — and ``serve`` says so before it starts a server."""
+    from core.database import get_engine, get_sessionmaker
+    from core.settings import get_settings
+
+    def forget() -> None:
+        for cached in (get_settings, get_engine, get_sessionmaker):
+            cached.cache_clear()
+
+    monkeypatch.setenv("DEPOT_DATABASE_URL", url)
+    forget()
+    try:
+        assert main(command) == 2
+    finally:
+        forget()
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    (line,) = err.strip().splitlines()
+    assert line.startswith("depot: the database cannot be used"), line
+    backend = url.split(":")[0].split("+")[0]
+    assert f"DEPOT_DATABASE_URL names {backend}" in line and "not supported" in line, line
+    assert "postgresql+psycopg://" in line and "SQLite" in line, line

@@ -70,3 +70,22 @@ def test_argparse_errors_carry_the_depot_prefix(capsys: pytest.CaptureFixture[st
     err = capsys.readouterr().err
     assert "depot: " in err and "error:" not in err, err
     assert "invalid choice" in err
+
+
+@pytest.mark.parametrize(
+    ("command", "actions"),
+    [("user", ("add", "list", "rotate", "revoke")), ("device", ("key", "decommission"))],
+)
+def test_a_command_without_its_action_shows_its_own_help_and_fails(
+    command: str, actions: tuple[str, ...], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An independent trial: ``depot user`` printed the top-level help and exited 2 without
+    saying what was missing. It shows that command's help and names the missing action."""
+    code = main([command])
+    shown = capsys.readouterr()
+    assert code != 0
+    assert f"usage: depot {command}" in shown.err, shown
+    assert "serve" not in shown.out + shown.err, "not the top-level help"
+    message = shown.err.strip().splitlines()[-1]
+    assert message.startswith(f"depot: {command}: "), message
+    assert "ACTION" in message and all(a in message for a in actions), message

@@ -307,6 +307,23 @@ def test_numbers_of_the_wrong_json_type_are_refused(client: TestClient) -> None:
     assert client.post("/api/v1/events", json=good, headers=keys["A-ac"]).status_code == 201
 
 
+@pytest.mark.parametrize("sample", [True, False, "1", 2, -1, 0.5])
+def test_manchester_samples_are_the_numbers_0_and_1(client: TestClient, sample: object) -> None:
+    """``"samples": [true, ...]`` was read as 1 (an independent trial): a sample is the JSON
+    number 0 or 1 (protocol.md: "list of 0/1"), and anything else is refused, naming the field."""
+    keys = build_line(client)
+    samples = [1, 1, 1, 1, 0, 0, 0, 0]
+    body = event("m-bad", "ir_manchester", section="AB", samples_per_bit=4,
+                 samples=[*samples, sample])  # fmt: skip
+    answer = client.post("/api/v1/events", json=body, headers=keys["B-ir"])
+    assert answer.status_code == 422, (sample, answer.text)
+    assert answer.headers["content-type"] == "application/problem+json"
+    assert "samples" in answer.json()["errors"][0]["loc"], answer.json()
+    good = event("m-ok", "ir_manchester", section="AB", samples_per_bit=4,
+                 samples=[*samples, 1.0, 0])  # fmt: skip
+    assert client.post("/api/v1/events", json=good, headers=keys["B-ir"]).status_code == 201
+
+
 def test_a_key_sent_twice_in_one_object_is_refused(client: TestClient) -> None:
     """``"axles": 1, "axles": 500`` stored 500 (found by the independent trial): which value the
     device meant is unknown, so the event is refused and nothing stored."""

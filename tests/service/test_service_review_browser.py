@@ -163,3 +163,40 @@ def test_screen_updates_in_place_keeps_the_draft_alerts_and_turns_stale(
         for button in page.locator("button.act").all():
             expect(button).to_be_disabled()
         browser.close()
+
+
+FOLD_PX = 768  # the dispatcher's laptop: 1366×768, nothing scrolled
+
+
+def test_the_queue_is_the_first_thing_seen_on_a_long_line(tmp_path: Path) -> None:
+    """An independent trial: with a line of many sections the queue of sections needing a
+    person was below the fold at 1366×768 (under the list of every section), and its heading
+    said "oldest first" while it is most urgent first."""
+    from playwright.sync_api import expect, sync_playwright
+
+    with live_server(tmp_path) as url, httpx.Client(base_url=url) as http:
+        line = Line(http, build_line(http))  # type: ignore[arg-type]
+        admin = {"Authorization": f"Bearer {get_settings().admin_token}"}
+        for i in range(30):
+            station = {"id": f"S{i:02}", "name": f"Station {i}"}
+            assert http.post("/api/v1/stations", json=station, headers=admin).status_code == 201
+            section = {"id": f"Z{i:02}", "from_station": "C", "to_station": f"S{i:02}"}
+            assert http.post("/api/v1/sections", json=section, headers=admin).status_code == 201
+        run = review_run(line)
+        with get_sessionmaker().begin() as session:
+            token = create_user(session, "olena", "dispatcher")
+        with sync_playwright() as playwright:
+            browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+            page = browser.new_page(viewport={"width": 1366, "height": FOLD_PX})
+            page.goto(f"{url}/review")
+            page.fill("#token", token)
+            page.get_by_role("button", name="Log in").click()
+            item = page.locator(f"#queue tr.item[data-run='{run}']")
+            expect(item).to_be_visible()
+            box = item.bounding_box()
+            assert box is not None
+            assert box["y"] >= 0 and box["y"] + box["height"] <= FOLD_PX, box
+            heading = page.locator("#frag-queue h2")
+            expect(heading).to_contain_text("most urgent first")
+            expect(heading).not_to_contain_text("oldest first")
+            browser.close()

@@ -285,3 +285,32 @@ def test_a_new_alarm_comes_first_in_the_queue_above_older_reviews() -> None:
         {"id": "GH", "state": "alarm", "state_since": None},
     ]
     assert [s["id"] for s in queue_order(queue)] == ["GH", "AB", "XY", "BC", "EF", "CD"]
+
+
+def test_a_car_not_in_the_fleet_register_is_shown_as_such(
+    line: Line, client: TestClient, session: Session
+) -> None:
+    """An independent trial: car #250 (an IR number no registered car has) in a consist that
+    otherwise matched passed ``complete`` with nothing said. The verdict stands (clearance.md
+    compares the consists read; the same number on both sides agrees), but the screen names
+    the car as not in the fleet register."""
+    from datetime import timedelta
+
+    from tests.service.reviewkit import TRANSIT
+    from tests.service.scenario import jpeg
+
+    line.heartbeat_all(T0 - timedelta(seconds=20))
+    line.read("A", [117, 250, 118], T0 - timedelta(seconds=30))
+    run = line.depart(T0)
+    arrive = T0 + TRANSIT
+    line.heartbeat_all(arrive - timedelta(seconds=30))
+    line.read("B", [117, 250, 118], arrive - timedelta(seconds=40))
+    line.snapshot("B-cam", arrive - timedelta(seconds=5), jpeg(disc=True, seed=21))
+    assert line.arrive(arrive)["verdict"] == "complete"
+    login(client, session)
+    page = client.get(f"/review?run={run}").text
+    consist = page[page.index('data-family="infrared"') :]
+    assert re.search(r"#250[^<]*</b>\s*not in the fleet register", consist), consist[:1500]
+    assert 'class="car mark-same unregistered"' in consist
+    assert page.count("not in the fleet register") >= 1
+    assert "0117" in consist and "#117" not in consist

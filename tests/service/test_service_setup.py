@@ -109,3 +109,29 @@ def test_openapi_documents_the_event_schemas(client: TestClient) -> None:
     assert {"DeviceEvent", "EventBatch", "TrainArrived", "WheelMarks"} <= schemas.keys()
     body = document["paths"]["/api/v1/events"]["post"]["requestBody"]
     assert "DeviceEvent" in str(body)
+
+
+def test_a_car_s_codes_are_numbers_within_the_fleet_s_range(client: TestClient) -> None:
+    """An independent trial: ``POST /cars`` took wheel_code 300 (a wheel mark carries
+    ``zones_per_axle`` = 8 bits in the duplicate layout: 0–255, identification.md §2) and "7"
+    (text). Each is refused, 422 problem+json naming the field; 255 is accepted."""
+    from identification.rules import RULES
+
+    top = 2**RULES.zones_per_axle - 1
+    for n, (field, value) in enumerate(
+        [
+            ("wheel_code", top + 1),
+            ("wheel_code", -1),
+            ("wheel_code", "7"),
+            ("wheel_code", True),
+            ("ir_number", "7"),
+            ("axles", "4"),
+        ]  # fmt: skip
+    ):
+        body = {"id": f"09{n}", field: value}
+        answer = client.post("/api/v1/cars", json=body, headers=ADMIN)
+        assert answer.status_code == 422, (field, value, answer.text)
+        assert answer.headers["content-type"] == "application/problem+json"
+        assert [e["loc"] for e in answer.json()["errors"]] == [["body", field]], answer.json()
+    assert client.get("/api/v1/cars", headers=ADMIN).json() == []
+    post_ok(client, "/api/v1/cars", {"id": "0255", "wheel_code": top, "ir_number": 7})

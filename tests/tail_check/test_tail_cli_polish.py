@@ -79,3 +79,29 @@ def test_tail_study_summary_names_the_tables_own_minimum(
     minima = {f"{k} at c_Δ = {d} %" for v, k, d in cells if v == low}
     summary = next(s for s in lines if s.startswith("lowest mean ε in the table"))
     assert any(m in summary for m in minima), (summary, minima)
+
+
+def test_an_unreadable_image_gives_depot_s_message_only(tmp_path: Path) -> None:
+    """An independent trial: OpenCV's own ``[ WARN:0@…] … imread_(…): can't open/read file``
+    line came before depot's message (OpenCV writes it to the process's stderr, hence a real
+    process here). Only depot's line is shown, and the next file is still checked."""
+    import subprocess
+    import sys
+
+    missing = tmp_path / "missing.jpg"
+    garbage = tmp_path / "garbage.jpg"
+    garbage.write_bytes(b"not an image")
+    done = subprocess.run(
+        [sys.executable, "-m", "service.cli", "tail-check", str(missing), str(garbage), "--json"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert done.returncode == 2, done
+    lines = done.stderr.strip().splitlines()
+    assert [line.split(" (")[0] for line in lines] == [
+        f"depot: cannot read image {str(missing)!r}",
+        f"depot: cannot read image {str(garbage)!r}",
+    ], done.stderr
+    assert "WARN" not in done.stderr
