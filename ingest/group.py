@@ -111,7 +111,7 @@ def _foresee(
     foreseen = {}
     for index in valid:
         device, event, _ = items[index]
-        answer = foreseen_answer(session, device, event) if can_foresee(event.kind) else None
+        answer = foreseen_answer(session, device, event)  # None for kinds without a foresight
         if answer is not None:
             foreseen[index] = answer
     return foreseen

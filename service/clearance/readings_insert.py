@@ -15,11 +15,11 @@ from __future__ import annotations
 from functools import cache
 from typing import Any
 
-from pydantic import TypeAdapter
 from sqlalchemy import Table, TextClause, event, text
 from sqlalchemy.dialects import postgresql
 from sqlalchemy.orm import Session
 
+from ingest.rows import rows_document
 from service.clearance.models import AxleReading
 
 TABLE: Table = AxleReading.__table__  # type: ignore[assignment]
@@ -41,15 +41,12 @@ def insert_statement() -> TextClause:
     )
 
 
-_DOCUMENT: TypeAdapter[list[dict[str, Any]]] = TypeAdapter(list[dict[str, Any]])
-
-
 @event.listens_for(Session, "before_flush")
 def _readings_first(session: Session, *_: Any) -> None:
     readings = [row for row in session.new if type(row) is AxleReading]
     if not readings or session.get_bind().dialect.name != "postgresql":
         return
     rows = [{name: getattr(row, name) for name in COLUMNS} for row in readings]
-    session.connection().execute(insert_statement(), {"rows": _DOCUMENT.dump_json(rows).decode()})
+    session.connection().execute(insert_statement(), {"rows": rows_document(rows)})
     for row in readings:
         session.expunge(row)

@@ -144,16 +144,9 @@ def test_a_settings_error_never_prints_the_tokens(
     assert "Zq7h7Q" not in err and "m3tr1cs" not in err and "Traceback" not in err, err
 
 
-@pytest.mark.parametrize(
-    "url",
-    ["postgresql+psycopg://postgres@127.0.0.1:1/none", "postgres://x@y/z"],
-    ids=["unreachable", "unknown-scheme"],
-)
-def test_a_database_that_cannot_be_used_is_one_clear_line(
-    url: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """A SQLAlchemy traceback with no hint (found by the second trial) is now one depot: line
-    that names the setting and the fix."""
+def _main_on_database(url: str, command: list[str], monkeypatch: pytest.MonkeyPatch) -> int:
+    """``depot COMMAND`` with ``DEPOT_DATABASE_URL`` set to ``url`` (the cached settings,
+    engine and sessions forgotten before and after)."""
     from core.database import get_engine, get_sessionmaker
     from core.settings import get_settings
 
@@ -164,9 +157,22 @@ def test_a_database_that_cannot_be_used_is_one_clear_line(
     monkeypatch.setenv("DEPOT_DATABASE_URL", url)
     forget()
     try:
-        assert main(["user", "list"]) == 2
+        return main(command)
     finally:
         forget()
+
+
+@pytest.mark.parametrize(
+    "url",
+    ["postgresql+psycopg://postgres@127.0.0.1:1/none", "postgres://x@y/z"],
+    ids=["unreachable", "unknown-scheme"],
+)
+def test_a_database_that_cannot_be_used_is_one_clear_line(
+    url: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A SQLAlchemy traceback with no hint (found by the second trial) is now one depot: line
+    that names the setting and the fix."""
+    assert _main_on_database(url, ["user", "list"], monkeypatch) == 2
     err = capsys.readouterr().err
     assert err.startswith("depot: the database cannot be used") and "DEPOT_DATABASE_URL" in err
     assert "Traceback" not in err
@@ -183,19 +189,7 @@ def test_an_unsupported_database_is_named_with_the_fix(
     """An independent trial: a mysql:// URL ended in a traceback (no MySQL driver). depot runs
     on SQLite and PostgreSQL through psycopg: one line names the setting, what it names and
     the fix — and ``serve`` says so before it starts a server."""
-    from core.database import get_engine, get_sessionmaker
-    from core.settings import get_settings
-
-    def forget() -> None:
-        for cached in (get_settings, get_engine, get_sessionmaker):
-            cached.cache_clear()
-
-    monkeypatch.setenv("DEPOT_DATABASE_URL", url)
-    forget()
-    try:
-        assert main(command) == 2
-    finally:
-        forget()
+    assert _main_on_database(url, command, monkeypatch) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err
     (line,) = err.strip().splitlines()
