@@ -8,7 +8,7 @@ from annotated_types import MaxLen
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from core.errors import Unprocessable, validation_errors
-from ingest.schemas import EventBatch
+from ingest.envelopes import EventBatch
 
 # The protocol's batch size (≤ 1000 events), read from the published schema.
 MAX_EVENTS = next(

@@ -29,9 +29,9 @@ from ingest import service
 from ingest.batches import batch_events
 from ingest.commit_queue import committer_for
 from ingest.device_auth import EVENT_SECURITY, EventDevice
+from ingest.envelopes import BatchResult, EventAck
 from ingest.handlers import prepare
 from ingest.payload import read_json
-from ingest.schemas import BatchResult, EventAck
 from ingest.snapshots import check_form_fields, check_image, store_image
 
 router = APIRouter(tags=["devices"])

@@ -374,28 +374,6 @@ ALLOWED_KINDS: dict[str, frozenset[str]] = {
 }
 
 
-class EventBatch(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-    events: Annotated[list[dict[str, Any]], Field(min_length=1, max_length=1000)]
-
-
-class EventAck(BaseModel):
-    event_id: str
-    status: Literal["created", "duplicate"]
-    model_config = ConfigDict(extra="allow")
-
-
-class BatchItemResult(BaseModel):
-    event_id: str | None
-    status: Literal["created", "duplicate", "rejected"]
-    error: dict[str, Any] | None = None
-    result: dict[str, Any] | None = None
-
-
-class BatchResult(BaseModel):
-    results: list[BatchItemResult]
-
-
 def section_of(event: EventBase) -> str | None:
     """The section an event names, or None for a kind without one. (``getattr(event,
     "section", None)`` says the same but costs an AttributeError raised inside pydantic, some

@@ -44,15 +44,6 @@ estimated position (or while the position is unknown); when the estimate has
 passed a marker by that window without a read, the marker is declared
 missed.
 
-Where each part lives
----------------------
-:mod:`motion.model` the Kalman algebra; :mod:`motion.buffer` the replay
-buffer of the last ``max_delay_s`` seconds; :mod:`motion.policy` which GNSS
-speeds and fixes are used; :mod:`motion.direction` whether the sign of the
-speed is known (GNSS gives a magnitude); :mod:`motion.restart` on-board
-restarts (the clock starting again); :mod:`motion.state` the JSON snapshot;
-:mod:`motion.samples` the inputs, outputs, tuning and the sample rules.
-
 Feeding it from the service
 ---------------------------
 One :class:`TrackFilter` per train, sharing one :class:`MarkerTable`

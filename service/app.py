@@ -11,9 +11,10 @@ from uvicorn.middleware.proxy_headers import ProxyHeadersMiddleware
 
 from core.errors import install_error_handlers
 from core.settings import get_settings
+from ingest.envelopes import EventBatch
 from ingest.event_log import router as event_log_router
 from ingest.router import router as ingest_router
-from ingest.schemas import EVENT_ADAPTER, EventBatch, TailSnapshot
+from ingest.schemas import EVENT_ADAPTER, TailSnapshot
 from service import features
 from service.clearance.router import router as clearance_router
 from service.docs import install_docs

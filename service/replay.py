@@ -14,7 +14,7 @@ from core.models import Device, Section
 from ingest.handlers import Derivation, derive
 from ingest.models import RawEvent, Snapshot
 from ingest.schemas import EVENT_ADAPTER, TailSnapshot
-from service.clearance import service as clearance
+from service.clearance import actions
 from service.clearance.models import (
     AuditRecord,
     AxleReading,
@@ -77,7 +77,7 @@ def replay(session: Session, *, progress: Any = None) -> dict[str, int]:
             who = Principal(role=record.actor_role, name=record.actor)
             try:
                 with session.begin_nested():
-                    clearance.act(
+                    actions.act(
                         session,
                         record.run_id,
                         record.action,

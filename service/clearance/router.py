@@ -15,7 +15,7 @@ from core.errors import NotFound
 from core.models import Section
 from ingest.models import Snapshot
 from ingest.snapshots import load_bgr
-from service.clearance import service
+from service.clearance import actions
 from service.clearance.models import AuditRecord, Run, WheelMarking
 from service.clearance.responses import (
     AuditOut,
@@ -99,7 +99,7 @@ def get_run(run_id: RunId, session: DbSession, _: CurrentReader) -> dict[str, An
 def decide_run(
     run_id: RunId, body: DecisionIn, session: DbSession, who: CurrentDispatcher
 ) -> dict[str, Any]:
-    record = service.act(session, run_id, body.action, body.reason, who, utcnow())
+    record = actions.act(session, run_id, body.action, body.reason, who, utcnow())
     run = session.get_one(Run, run_id)
     section = session.get_one(Section, run.section)
     return {

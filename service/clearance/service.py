@@ -7,8 +7,6 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
-from core.auth import Principal
-from core.errors import NotFound
 from core.models import Section
 from service.clearance import attribution, certainty, occupancy, unseen
 from service.clearance.attribution import forget_runs, placement_at, side_of
@@ -20,8 +18,8 @@ from service.clearance.doubts import (
 )
 from service.clearance.evidence import gather
 from service.clearance.locks import lock_section
-from service.clearance.models import AuditRecord, Run
-from service.clearance.refusals import ACTION_STATES, check_action
+from service.clearance.models import Run
+from service.clearance.refusals import ACTION_STATES
 from service.clearance.rules import (
     Verdict,
     decide,
@@ -36,7 +34,6 @@ BUSY_STATES = ("occupied", "awaiting_confirmation", "review", "alarm", "blocked"
 __all__ = [
     "ACTION_STATES",
     "SYSTEM",
-    "act",
     "attach",
     "close_run",
     "evaluate",
@@ -45,7 +42,7 @@ __all__ = [
 ]
 
 
-def _set_state(section: Section, state: str, at: datetime) -> None:
+def set_state(section: Section, state: str, at: datetime) -> None:
     # A state's time never goes back before one already shown (a late departure, a device
     # clock behind, late evidence after a dispatcher's decision).
     if section.state != state:
@@ -100,7 +97,7 @@ def open_run(
         run.status = "conflict"  # waits behind the current run
     else:
         section.current_run_id = run_id
-    _set_state(section, "alarm" if run.conflict else "occupied", not_ahead(at, received))
+    set_state(section, "alarm" if run.conflict else "occupied", not_ahead(at, received))
     session.flush()
     out: dict[str, Any] = {"run": run_id}
     if run.conflict:
@@ -214,7 +211,7 @@ def _unseen_arrival(session: Session, section: Section, arrival: _Arrival) -> di
     forget_runs(session, section.id)
     if section.state == "free":
         section.current_run_id = run.id
-        _set_state(section, "occupied", not_ahead(arrival.occurred_at, received))
+        set_state(section, "occupied", not_ahead(arrival.occurred_at, received))
     else:
         run.status = "conflict"  # waits behind the current run, like a train departed into it
     session.flush()
@@ -288,13 +285,13 @@ def evaluate(
         else:
             new = verdict != "complete" and bool(set(reasons) - set(before))
             state = redecided_state(section.state, verdict, section.mode, new)
-        _set_state(section, state, at)
+        set_state(section, state, at)
         if section.state == "free":
             promote_conflict(session, section, at)
     elif verdict == "incomplete" and previous != "incomplete":
         # Late proof that an earlier train lost cars: they may still stand in the section the
         # next train now holds (clearance.md: late evidence of incompleteness raises the alarm).
-        _set_state(section, next_state(section.state, verdict, section.mode), at)
+        set_state(section, next_state(section.state, verdict, section.mode), at)
     session.flush()
     return {"run": run.id, "verdict": verdict, "reasons": reasons, "section_state": section.state}
 
@@ -309,11 +306,11 @@ def promote_conflict(session: Session, section: Section, at: datetime) -> None:
     section.current_run_id = waiting.id
     if waiting.arrived_at is None:
         waiting.status = "running"
-        _set_state(section, "occupied", at)
+        set_state(section, "occupied", at)
         return
     waiting.status = "arrived"
     verdict: Verdict = waiting.verdict or "undetermined"  # type: ignore[assignment]
-    _set_state(section, next_state("occupied", verdict, section.mode), at)
+    set_state(section, next_state("occupied", verdict, section.mode), at)
 
 
 def attach(
@@ -357,66 +354,3 @@ def attached_answer(section_id: str, run: Run | None, station: str) -> dict[str,
     if run.arrived_at is not None:
         return None
     return {"run": run.id, "side": side_of(run, station)}
-
-
-def act(
-    session: Session,
-    run_id: int,
-    action: str,
-    reason: str,
-    actor: Principal,
-    at: datetime,
-    *,
-    audit: bool = True,
-) -> AuditRecord | None:
-    """A dispatcher's ``clear``, ``keep_blocked`` or ``sweep`` on the section's current, arrived
-    run. ``sweep`` only where nothing proves the section empty (alarm, review, blocked); a
-    ``clear`` of a section awaiting its sweep is audited as a force-clear.
-
-    The one way to act on a run: the API and the review form both call it. An action that
-    asks for the state the section is already in (a second ``clear``, a double click) is
-    refused (409) before anything is written, so the audit holds each decision once.
-    """
-    run = session.get(Run, run_id)
-    if run is None:
-        raise NotFound(f"run {run_id} does not exist")
-    section = lock_section(session, run.section)
-    missing = check_action(session, run, section, action, at)
-    before = section.state
-    gathered = gather(session, run, section)
-    _set_state(section, ACTION_STATES[action], at)
-    run.auto = False
-    if run.arrived_at is None and not (missing and action == "keep_blocked"):
-        # Released without an arrival: it holds the section no more. A silent section's
-        # train kept blocked still does: its arrival, if it ever comes, closes its run.
-        run.status = "overtaken"
-        forget_runs(session, section.id)
-    if action == "clear":
-        promote_conflict(session, section, at)
-    record = None
-    if audit:
-        record = AuditRecord(
-            run_id=run.id,
-            section=section.id,
-            action=action,
-            reason=reason,
-            actor=actor.name,
-            actor_role=actor.role,
-            recorded_at=at,
-            state_before=before,
-            state_after=section.state,
-            evidence={
-                "verdict": run.verdict,
-                "reasons": run.reasons,
-                **gathered.summary,
-                **(
-                    {"force_clear": True}
-                    if action == "clear" and before == "awaiting_sweep"
-                    else {}
-                ),
-                **({"arrival_missing": missing} if missing else {}),
-            },
-        )
-        session.add(record)
-    session.flush()
-    return record

@@ -16,7 +16,7 @@ from core.database import DbSession, utcnow
 from core.errors import DepotError
 from core.settings import get_settings
 from core.timefmt import clock_time, date_time
-from service.clearance import service as clearance
+from service.clearance import actions
 from service.clearance.router import (
     MAX_ROW_ID,
     RunId,
@@ -191,7 +191,7 @@ def _decide(
     if refused:
         return refused, "error"
     try:
-        clearance.act(session, run_id, action, kept, who, utcnow())
+        actions.act(session, run_id, action, kept, who, utcnow())
     except DepotError as exc:
         return f"Refused: {exc.detail}; nothing was recorded.", "error"
     if action == "sweep":

@@ -16,10 +16,10 @@ import numpy as np
 from tail_check import DEFAULT_PROFILE
 from tail_check.colour import TABLE_MIN_PIXELS, _rank_tables, band_mask, surround_share
 from tail_check.detect import WORK_SIDE
+from tail_check.pixels import subtract_level
 from tail_check.regions import MAX_CANDIDATES
 
 RNG = np.random.default_rng(41)
-detect_module = importlib.import_module("tail_check.detect")
 regions = importlib.import_module("tail_check.regions")
 
 
@@ -29,9 +29,9 @@ def test_veil_subtraction_by_table_is_opencvs_subtraction() -> None:
         h, w = (int(v) for v in RNG.integers(1, 300, 2))
         image = RNG.integers(0, 256, (h, w, 3), dtype=np.uint8)
         plain = cv2.subtract(image, np.full(3, level, np.float64))
-        assert np.array_equal(detect_module._subtract(image, level), plain), level
+        assert np.array_equal(subtract_level(image, level), plain), level
     image = RNG.integers(0, 256, (20, 30, 3), dtype=np.uint8)
-    assert detect_module._subtract(image, 0.0) is image
+    assert subtract_level(image, 0.0) is image
 
 
 def test_rank_tables_give_the_float_band_in_both_widths() -> None:

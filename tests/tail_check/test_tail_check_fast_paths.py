@@ -18,8 +18,9 @@ import pytest
 import tail_check
 from tail_check import DEFAULT_PROFILE, decode_snapshot, detect, detect_snapshot
 from tail_check.colour import TABLE_MIN_PIXELS, band_mask
-from tail_check.detect import detect_reduced, percentile_u8, std_u8
+from tail_check.detect import detect_reduced
 from tail_check.labels import label_areas, label_box, label_regions
+from tail_check.pixels import percentile_u8, std_u8
 from tail_check.regions import _median_colour
 from tail_check.shape import median
 from tail_check.snapshot import ReducedDecode, jpeg_size, reduction_for
