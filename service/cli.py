@@ -12,9 +12,16 @@ from datetime import datetime
 
 from pydantic import ValidationError
 from sqlalchemy.engine import make_url
-from sqlalchemy.exc import ArgumentError, IntegrityError, NoSuchModuleError, OperationalError
+from sqlalchemy.exc import (
+    ArgumentError,
+    IntegrityError,
+    NoSuchModuleError,
+    OperationalError,
+    ProgrammingError,
+    SQLAlchemyError,
+)
 
-from core.database import get_sessionmaker, utcnow
+from core.database import get_engine, get_sessionmaker, utcnow
 from core.errors import DepotError
 from core.settings import get_settings
 from service import commands
@@ -51,6 +58,22 @@ def database_problem() -> str | None:
         f"the database cannot be used: DEPOT_DATABASE_URL names {kind[0]} (driver {kind[1]}),"
         f" which is not supported; {DATABASE_FIX}"
     )
+
+
+def migration_problem() -> str | None:
+    """Why a reachable database cannot be used when it was never migrated (its tables are
+    missing: SQLite says OperationalError, PostgreSQL ProgrammingError); None when it has a
+    schema or cannot even be reached (reported by the caller)."""
+    from service.migrate import current_revision
+
+    try:
+        with get_engine().connect() as connection:
+            revision = current_revision(connection)
+    except SQLAlchemyError:
+        return None
+    if revision is not None:
+        return None
+    return "the database is not migrated (it has no depot schema yet); run `depot migrate` first"
 
 
 def _usable_database() -> None:
@@ -287,12 +310,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         if exc.title != "Settings":
             raise
         return fail(settings_problem(exc))
-    except (OperationalError, NoSuchModuleError, ArgumentError, ImportError) as exc:
+    except (
+        OperationalError,
+        ProgrammingError,
+        NoSuchModuleError,
+        ArgumentError,
+        ImportError,
+    ) as exc:
         # an unsupported URL fails wherever its engine is made (no driver: ImportError)
-        problem = database_problem()
+        problem = database_problem() or migration_problem()
         if problem is not None:
             return fail(problem)
-        if isinstance(exc, ImportError):
+        if isinstance(exc, ImportError | ProgrammingError):
             raise
         first = str(getattr(exc, "orig", None) or exc).strip().splitlines()[0]
         return fail(

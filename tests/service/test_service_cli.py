@@ -10,10 +10,13 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from sqlalchemy import text
 
 from core import database
+from core.database import make_engine
 from core.settings import get_settings
 from service.cli import main
+from tests.conftest import BACKENDS, POSTGRES_URL
 
 
 @pytest.fixture
@@ -197,3 +200,41 @@ def test_an_unsupported_database_is_named_with_the_fix(
     backend = url.split(":")[0].split("+")[0]
     assert f"DEPOT_DATABASE_URL names {backend}" in line and "not supported" in line, line
     assert "postgresql+psycopg://" in line and "SQLite" in line, line
+
+
+@pytest.fixture(params=BACKENDS)
+def unmigrated_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
+    """An empty database of each backend: reachable, but never migrated."""
+    if request.param == "sqlite":
+        yield f"sqlite:///{tmp_path / 'empty.sqlite3'}"
+        return
+    if not POSTGRES_URL:
+        pytest.skip("DEPOT_TEST_POSTGRES_URL is not set; PostgreSQL tests skipped")
+    server, name = POSTGRES_URL.rsplit("/", 1)
+    admin = make_engine(f"{server}/postgres").execution_options(isolation_level="AUTOCOMMIT")
+    empty = f"{name}_unmigrated"
+    with admin.connect() as connection:
+        connection.execute(text(f'DROP DATABASE IF EXISTS "{empty}" WITH (FORCE)'))
+        connection.execute(text(f'CREATE DATABASE "{empty}"'))
+    yield f"{server}/{empty}"
+    database.get_engine.cache_clear()
+    with admin.connect() as connection:
+        connection.execute(text(f'DROP DATABASE IF EXISTS "{empty}" WITH (FORCE)'))
+    admin.dispose()
+
+
+@pytest.mark.parametrize("command", [["user", "list"], ["replay"]])
+def test_a_database_never_migrated_is_one_line_naming_depot_migrate(
+    unmigrated_url: str,
+    command: list[str],
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """On an empty PostgreSQL database `depot user list` ended in a ProgrammingError
+    traceback (SQLite's missing table is an OperationalError, which was already caught)."""
+    assert _main_on_database(unmigrated_url, command, monkeypatch) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    (line,) = err.strip().splitlines()
+    assert line.startswith("depot: the database is not migrated"), line
+    assert "depot migrate" in line, line
