@@ -21,7 +21,7 @@ from ingest.checks import (
 from ingest.handlers import check_derivable
 from ingest.holding import holding
 from ingest.liveness import seen, touched_at_end
-from ingest.rows import insert_many, raw_values, stored_many, write_answers
+from ingest.rows import insert_each_that_stores, raw_values, stored_many, write_answers
 from ingest.schemas import section_of
 from ingest.store import answer_now, answer_stored, derive_new, duplicate
 
@@ -35,6 +35,13 @@ def rejected(event_id: Any, exc: Unprocessable | Conflict | Forbidden) -> dict[s
         "status": "rejected",
         "error": error,
     }
+
+
+def not_storable(event_id: str, database_says: str) -> dict[str, Any]:
+    """The result of an item whose value the database refused (the others are stored)."""
+    return rejected(
+        event_id, Unprocessable(f"a value of this event cannot be stored ({database_says})")
+    )
 
 
 def validated(
@@ -122,12 +129,17 @@ def _accept_batch(
         )
         for _, event, body in first.values()
     }
-    inserted = insert_many(session, list(rows.values()))
+    inserted, refused = insert_each_that_stores(session, list(rows.values()))
     # Stored before this batch (a batch sent again): looked up together, in one query.
-    before = stored_many(session, [(device.id, e) for e in rows if (device.id, e) not in inserted])
+    before = stored_many(
+        session, [(device.id, e) for e in rows if (device.id, e) not in inserted | refused]
+    )
     answers: list[dict[str, Any]] = []
     for index, event, body in first.values():
         raw_id = inserted.get((device.id, event.event_id))
+        if (device.id, event.event_id) in refused:
+            results[index] = not_storable(event.event_id, refused[(device.id, event.event_id)])
+            continue
         if raw_id is None:
             found = before.get((device.id, event.event_id))
             results[index] = stored_item(session, device, event, body, answers, found)

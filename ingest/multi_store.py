@@ -25,11 +25,11 @@ from typing import Any
 from sqlalchemy.orm import Session
 
 from core.models import Device
-from ingest.batch_store import stored_item, validated
+from ingest.batch_store import not_storable, stored_item, validated
 from ingest.handlers import Derivation, derive
 from ingest.holding import holding
 from ingest.liveness import touched_at_end
-from ingest.rows import as_raw, insert_many, raw_values, write_answers
+from ingest.rows import as_raw, insert_each_that_stores, raw_values, write_answers
 from ingest.store import answer_now, derive_new
 
 Result = dict[str, Any]
@@ -118,11 +118,14 @@ def _accept_batches(
         ident: _row(batches[b], index, event, body, transport)
         for ident, (b, index, event, body) in first.items()
     }
-    inserted = insert_many(session, list(rows.values()))
+    inserted, refused = insert_each_that_stores(session, list(rows.values()))
     answers: list[Any] = []
     for ident, (b, index, event, body) in first.items():
         device = batches[b].device
         raw_id = inserted.get(ident)
+        if ident in refused:
+            results[b][index] = not_storable(event.event_id, refused[ident])
+            continue
         if raw_id is None:
             results[b][index] = stored_item(session, device, event, body, answers)
             continue

@@ -15,6 +15,7 @@ from typing import Any
 from pydantic import ConfigDict, TypeAdapter
 from sqlalchemy import Table, bindparam, select, text, update
 from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.exc import DataError, DBAPIError
 from sqlalchemy.orm import Session
 
 from core.database import utcnow
@@ -133,6 +134,35 @@ def insert_many(session: Session, rows: list[dict[str, Any]]) -> dict[tuple[str,
         return {(d, e): i for i, d, e in session.execute(statement, rows)}
     document = rows_document(rows)
     return {(d, e): i for i, d, e in session.execute(JSON_INSERT, {"rows": document})}
+
+
+def insert_each_that_stores(
+    session: Session, rows: list[dict[str, Any]]
+) -> tuple[dict[tuple[str, str], int], dict[tuple[str, str], str]]:
+    """:func:`insert_many`, except that a value the database refuses (``DataError``: a rule the
+    validation does not know) refuses only the rows that hold it, never the whole batch: each
+    item of a batch stands alone (protocol.md). Returns (ids of the inserted rows, the database's
+    first line for each refused row), both by (device, ``event_id``)."""
+    try:
+        with session.begin_nested():
+            return insert_many(session, rows), {}
+    except DataError:
+        pass  # rare: find the rows that hold the value, one savepoint each
+    inserted: dict[tuple[str, str], int] = {}
+    refused: dict[tuple[str, str], str] = {}
+    for row in rows:
+        try:
+            with session.begin_nested():
+                inserted.update(insert_many(session, [row]))
+        except DataError as exc:
+            refused[(row["device_id"], row["event_id"])] = first_line(exc)
+    return inserted, refused
+
+
+def first_line(exc: DBAPIError) -> str:
+    """The database's own first line of an error, without SQLAlchemy's statement dump."""
+    text = str(exc.orig if exc.orig is not None else exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
 
 
 def stored(session: Session, device_id: str, event_id: str) -> tuple[str, dict[str, Any]]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import re
-from datetime import UTC, datetime, timezone
+from datetime import UTC, datetime, timedelta, timezone
 from typing import Annotated, Any, ClassVar, Literal, get_args
 
 from pydantic import (
@@ -27,6 +27,11 @@ from motion.samples import SAMPLE_LIMITS, sample_problem
 
 EARLIEST = datetime(2000, 1, 1, tzinfo=UTC)
 LATEST = datetime(2100, 1, 1, tzinfo=UTC)
+# The world's time zones run from UTC-12:00 (Baker Island) to UTC+14:00 (Line Islands). A
+# device time outside them has a misconfigured zone (and PostgreSQL stores offsets only up to
+# ±15:59: such a time once failed in the database, taking its batch with it).
+WESTMOST_OFFSET = timedelta(hours=-12)
+EASTMOST_OFFSET = timedelta(hours=14)
 
 
 def _plausible(at: datetime) -> datetime:
@@ -35,6 +40,11 @@ def _plausible(at: datetime) -> datetime:
     # several per event of a batch); ``datetime.timezone`` is handled in C. The instant, its
     # offset and its text (isoformat, JSON) are unchanged.
     offset = at.utcoffset()
+    if offset is not None and not WESTMOST_OFFSET <= offset <= EASTMOST_OFFSET:
+        raise ValueError(
+            "the UTC offset must be between -12:00 and +14:00, as every time zone's"
+            " (check the device's time zone setting)"
+        )
     at = at.replace(tzinfo=UTC if not offset else timezone(offset))
     # A device clock outside this range is broken; its times would poison every computation.
     if not EARLIEST <= at < LATEST:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Iterator
+from datetime import timedelta
 from typing import Any
 
 import httpx
@@ -199,3 +200,30 @@ def test_refusals_name_the_event_and_the_device_when_readable(
     assert _stored(line, "ids-%") == []
     redone = "failed together" in caplog.text
     assert redone == (path == "one by one"), caplog.text  # refusals alone never cost the batch
+
+
+def test_a_value_only_the_database_refuses_is_refused_alone(
+    line: Line, sessions: sessionmaker[Session], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A value the validation lets through and PostgreSQL refuses (an offset past ±15:59, with
+    the validation's own bound widened to let it through) is that message's 422, final (not
+    500 to come again for ever), and inside a message's ``{"events": [...]}`` that item's
+    alone: the batch's other events are stored (they were refused with it)."""
+    if not line.database_url.startswith("postgresql"):
+        pytest.skip("SQLite stores any offset: the database refuses nothing here")
+    monkeypatch.setattr("ingest.schemas.EASTMOST_OFFSET", timedelta(hours=23, minutes=59))
+    key = _keys(line)[SENDER]
+    odd = _heartbeat("bad-db-odd", occurred_at="2026-11-23T19:00:00+16:00")
+    events = [json.loads(_heartbeat(f"bad-db-b{n}")) for n in (1, 3)]
+    batch = [
+        Message(SENDER, key, _heartbeat("bad-db-1")),
+        Message(SENDER, key, odd),
+        Message(SENDER, key, json.dumps({"events": [events[0], json.loads(odd), events[1]]})
+                .encode()),
+    ]  # fmt: skip
+    answers = handle_batch(sessions, batch, transport="mqtt", max_bytes=LIMIT)
+    assert [(a.status, a.retry) for a in answers] == [(201, False), (422, False), (200, False)]
+    assert "cannot be stored" in answers[1].body["detail"], answers[1].body
+    items = answers[2].body["results"]
+    assert [i["status"] for i in items] == ["created", "rejected", "created"]
+    assert _stored(line, "bad-db-%") == ["bad-db-1", "bad-db-b1", "bad-db-b3"]
