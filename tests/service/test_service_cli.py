@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
@@ -10,6 +11,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from fastapi.testclient import TestClient
 from sqlalchemy import text
 
 from core import database
@@ -238,3 +240,28 @@ def test_a_database_never_migrated_is_one_line_naming_depot_migrate(
     (line,) = err.strip().splitlines()
     assert line.startswith("depot: the database is not migrated"), line
     assert "depot migrate" in line, line
+
+
+def test_sections_shows_what_the_dispatcher_sees(
+    cli_data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`depot sections` (missing, found by the independent trial: no command showed the line's
+    state): the demo day's alarm on AB in capitals, the same states as the API's answer."""
+    assert main(["migrate"]) == 0
+    assert main(["sections"]) == 0
+    assert "no sections yet" in capsys.readouterr().out
+    assert main(["demo"]) == 0
+    capsys.readouterr()
+    assert main(["sections"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    ab = next(line for line in lines if line.startswith("AB "))
+    assert " ALARM " in ab and "incomplete" in ab, ab
+    assert main(["sections", "--json"]) == 0
+    shown = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    from service.app import create_app
+    from tests.conftest import ADMIN
+
+    with TestClient(create_app()) as client:
+        api = client.get("/api/v1/sections", headers=ADMIN).json()
+    assert shown == api
+    assert len(lines) == len(api) + 1  # a heading, then one line per section
