@@ -83,9 +83,7 @@ def if_match(header: str | None) -> list[str]:
     return [] if "*" in tags else [t for t in tags if t]
 
 
-def check_seen(
-    session: Session, run: Run, section: Section, seen: Sequence[Sequence[str]]
-) -> None:
+def check_seen(session: Session, run: Run, section: Section, seen: Sequence[Sequence[str]]) -> None:
     """Refuse (409) a decision taken on a look at the run that is no longer current: every
     look in ``seen`` (the revisions it may be) must hold the run's revision now.
 
@@ -100,7 +98,7 @@ def check_seen(
 
 
 def changed_words(seen: str, run: Run, state: str) -> str:
-    """"the run changed since you looked: verdict now incomplete (was undetermined), section now
+    """ "the run changed since you looked: verdict now incomplete (was undetermined), section now
     ALARM (was under review); …; look again": what a dispatcher must know before deciding."""
     parts = seen.split(SEPARATOR)
     was_verdict, was_state = (parts[0], parts[1]) if len(parts) == 3 else (None, None)

@@ -22,7 +22,7 @@ def audit_count(client: TestClient) -> int:
 
 
 def look(line: Line, run: int) -> httpx.Response:
-    answer = line.client.get(f"/api/v1/runs/{run}", headers=ADMIN)
+    answer: httpx.Response = line.client.get(f"/api/v1/runs/{run}", headers=ADMIN)
     assert answer.status_code == 200, answer.text
     return answer
 
@@ -30,11 +30,12 @@ def look(line: Line, run: int) -> httpx.Response:
 def clear(
     line: Line, run: int, who: dict[str, str], headers: dict[str, str] | None = None, **body: Any
 ) -> httpx.Response:
-    return line.client.post(
+    answer: httpx.Response = line.client.post(
         f"/api/v1/runs/{run}/decision",
         json={"action": "clear", "reason": "camera image looked ok to me", **body},
         headers={**who, **(headers or {})},
     )
+    return answer
 
 
 def test_a_clear_on_an_old_look_is_refused_naming_what_changed(
@@ -45,7 +46,10 @@ def test_a_clear_on_an_old_look_is_refused_naming_what_changed(
     assert seen.headers["etag"] == f'"{seen.json()["revision"]}"'
     late_photo_without_disc(line)
     assert line.section()["state"] == "alarm"
-    for sent in ({"headers": {"If-Match": seen.headers["etag"]}}, {"seen": seen.json()["revision"]}):
+    for sent in (
+        {"headers": {"If-Match": seen.headers["etag"]}},
+        {"seen": seen.json()["revision"]},
+    ):
         refused = clear(line, run, dispatcher, **sent)
         assert refused.status_code == 409, refused.text
         assert refused.headers["content-type"].startswith("application/problem+json")
