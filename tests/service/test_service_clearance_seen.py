@@ -4,6 +4,7 @@ the revision read before is refused (409, nothing recorded), saying what changed
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import httpx
@@ -15,6 +16,8 @@ from service.replay import replay
 from tests.conftest import ADMIN
 from tests.service.reviewkit import late_photo_without_disc, review_run
 from tests.service.scenario import Line
+
+REASON = "camera image looked ok to me"
 
 
 def audit_count(client: TestClient) -> int:
@@ -32,7 +35,7 @@ def clear(
 ) -> httpx.Response:
     answer: httpx.Response = line.client.post(
         f"/api/v1/runs/{run}/decision",
-        json={"action": "clear", "reason": "camera image looked ok to me", **body},
+        json={"action": "clear", "reason": REASON, **body},
         headers={**who, **(headers or {})},
     )
     return answer
@@ -158,3 +161,28 @@ def test_a_nul_in_a_station_name_is_named(client: TestClient) -> None:
     )
     assert refused.status_code == 422, refused.text
     assert [e["loc"] for e in refused.json()["errors"]] == [["body", "name"]]
+
+
+def test_the_review_form_refuses_an_old_look_and_a_nul(
+    line: Line, dispatcher: dict[str, str]
+) -> None:
+    """The form without the page's script (a plain POST) sends the hidden ``seen`` too."""
+    run = review_run(line)
+    login = line.client.post("/review/login", data={"token": dispatcher["Authorization"][7:]})
+    assert login.status_code == 200
+    page = line.client.get(f"/review?run={run}").text
+    drawn = re.search(r'name="seen" value="([^"]+)"', page)
+    assert drawn is not None and drawn.group(1) == look(line, run).json()["revision"]
+    late_photo_without_disc(line)
+    form = {"action": "clear", "reason": REASON, "seen": drawn.group(1)}
+    answer = line.client.post(f"/review/runs/{run}/decision", data=form)
+    assert "the run changed since you looked" in answer.text
+    scripted = line.client.post(
+        f"/review/runs/{run}/decision", data=form, headers={"Accept": "application/json"}
+    )
+    assert scripted.status_code == 409
+    assert "section now ALARM (was under review)" in scripted.json()["message"]
+    nul = {"action": "keep_blocked", "reason": "a\u0000bc"}
+    assert "NUL" in line.client.post(f"/review/runs/{run}/decision", data=nul).text
+    assert audit_count(line.client) == 0
+    assert line.section()["state"] == "alarm"
