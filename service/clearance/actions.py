@@ -3,6 +3,7 @@ person changes a section's state, each audited once (append-only)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from datetime import datetime
 
 from sqlalchemy.orm import Session
@@ -14,6 +15,7 @@ from service.clearance.evidence import gather
 from service.clearance.locks import lock_section
 from service.clearance.models import AuditRecord, Run
 from service.clearance.refusals import ACTION_STATES, check_action
+from service.clearance.revision import check_seen
 from service.clearance.service import promote_conflict, set_state
 
 
@@ -26,6 +28,7 @@ def act(
     at: datetime,
     *,
     audit: bool = True,
+    seen: Sequence[Sequence[str]] = (),
 ) -> AuditRecord | None:
     """A dispatcher's ``clear``, ``keep_blocked`` or ``sweep`` on the section's current, arrived
     run. ``sweep`` only where nothing proves the section empty (alarm, review, blocked); a
@@ -34,11 +37,22 @@ def act(
     The one way to act on a run: the API and the review form both call it. An action that
     asks for the state the section is already in (a second ``clear``, a double click) is
     refused (409) before anything is written, so the audit holds each decision once.
+
+    ``seen``: the looks at the run the person acted on, each the revisions it may be
+    (``revision``; an ``If-Match`` may list several); when given, a run that has changed
+    since is refused (409). The endpoints pass it; a replay passes none.
     """
     run = session.get(Run, run_id)
     if run is None:
         raise NotFound(f"run {run_id} does not exist")
     section = lock_section(session, run.section)
+    if seen:
+        # The run and section as committed now: evidence may have come while the lock was
+        # awaited, and a screen may have read them before this transaction took the lock.
+        session.flush()
+        session.refresh(run)
+        session.refresh(section)
+        check_seen(session, run, section, seen)
     missing = check_action(session, run, section, action, at)
     before = section.state
     gathered = gather(session, run, section)

@@ -92,6 +92,11 @@ class RunOut(Answer):
     )
     decision: DecisionOut | None
     overrides: list[AuditOut]
+    revision: str = Field(
+        description="what the run shows now (verdict, section state, evidence, actions), as"
+        " one opaque tag: also the ETag of GET /runs/{id}. Send it back with a decision"
+        " (If-Match or seen) and the decision is refused (409) if the run has changed since"
+    )
 
 
 class SectionOut(Answer):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Path, Query
+from fastapi import APIRouter, Header, Path, Query
 from fastapi.responses import FileResponse, Response
 from sqlalchemy import or_, select
 
@@ -26,6 +26,7 @@ from service.clearance.responses import (
     SnapshotMetaOut,
     WheelMarkingOut,
 )
+from service.clearance.revision import if_match
 from service.clearance.schemas import DecisionIn
 from service.clearance.tail import camera_profile, snapshot_file
 from service.clearance.views import audit_out, run_out, section_out
@@ -79,11 +80,16 @@ def list_runs(
 
 
 @router.get("/runs/{run_id}", response_model=RunOut)
-def get_run(run_id: RunId, session: DbSession, _: CurrentReader) -> dict[str, Any]:
+def get_run(
+    run_id: RunId, session: DbSession, _: CurrentReader, response: Response
+) -> dict[str, Any]:
     run = session.get(Run, run_id)
     if run is None:
         raise NotFound(f"run {run_id} does not exist")
-    return run_out(session, run)
+    shown = run_out(session, run)
+    # What a decision sends back (If-Match) to say which look at the run it was taken on.
+    response.headers["ETag"] = f'"{shown["revision"]}"'
+    return shown
 
 
 @router.post(
@@ -91,15 +97,28 @@ def get_run(run_id: RunId, session: DbSession, _: CurrentReader) -> dict[str, An
     response_model=DecisionAnswer,
     responses={
         409: {
-            "description": "not the current run, not arrived, or already so decided"
-            " (nothing is recorded then)"
+            "description": "not the current run, not arrived, already so decided, or the run"
+            " changed since the revision sent (If-Match or seen) — nothing is recorded then"
         }
     },
 )
 def decide_run(
-    run_id: RunId, body: DecisionIn, session: DbSession, who: CurrentDispatcher
+    run_id: RunId,
+    body: DecisionIn,
+    session: DbSession,
+    who: CurrentDispatcher,
+    if_match_header: Annotated[
+        str | None,
+        Header(
+            alias="If-Match",
+            max_length=500,
+            description="the ETag of GET /runs/{id} the decision is based on (as seen)",
+        ),
+    ] = None,
 ) -> dict[str, Any]:
-    record = actions.act(session, run_id, body.action, body.reason, who, utcnow())
+    # Each look said (the header's tags, the body's field) must be the run as it is now.
+    seen = [look for look in (if_match(if_match_header), [body.seen] if body.seen else []) if look]
+    record = actions.act(session, run_id, body.action, body.reason, who, utcnow(), seen=seen)
     run = session.get_one(Run, run_id)
     section = session.get_one(Section, run.section)
     return {

@@ -12,6 +12,7 @@ from core.models import Section
 from core.schemas import format_optional_instant
 from service.clearance import unseen
 from service.clearance.models import AuditRecord, Run
+from service.clearance.revision import revision
 
 QUEUE_STATES = ("alarm", "review", "awaiting_confirmation", "blocked")
 
@@ -67,6 +68,9 @@ def run_out(session: Session, run: Run) -> dict[str, Any]:
             **acted(overrides[-1] if overrides else None),
         },
         "overrides": [audit_out(r) for r in overrides],
+        "revision": revision(
+            run, session.get(Section, run.section), overrides[-1].id if overrides else None
+        ),
     }
 
 

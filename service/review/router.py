@@ -14,6 +14,7 @@ from pydantic import BaseModel
 from core.auth import Principal, person_for_token
 from core.database import DbSession, utcnow
 from core.errors import DepotError
+from core.schemas import holds_nul
 from core.settings import get_settings
 from core.timefmt import clock_time, date_time
 from service.clearance import actions
@@ -41,6 +42,7 @@ from service.review.service import (
 COOKIE = "depot_review"
 HERE = Path(__file__).parent
 STATIC = {"review.js": "text/javascript", "alert.wav": "audio/wav"}
+NUL_WORDS = "The reason holds a NUL character (U+0000): type it again. Nothing was recorded."
 FRAGMENTS = ("sections", "queue", "stale", "recent", "run", "actions")
 templates = Jinja2Templates(directory=str(HERE / "templates"))
 templates.env.globals.update(state_words=STATE_WORDS, action_labels=ACTION_LABELS)
@@ -181,22 +183,37 @@ def _refusal(session: DbSession, run_id: int, action: str) -> str | None:
 
 
 def _decide(
-    session: DbSession, who: Principal, run_id: int, action: str, reason: str
+    session: DbSession, who: Principal, run_id: int, action: str, reason: str, seen: str
 ) -> tuple[str, str]:
     if who.role not in DECIDERS:
         return "Only a dispatcher may clear or block a section.", "error"
     if action not in DONE_WORDS or (kept := meaningful(reason)) is None:
         return f"Give {RULE}. Nothing was recorded.", "error"
+    if holds_nul(kept):
+        return NUL_WORDS, "error"
     refused = _refusal(session, run_id, action)
     if refused:
         return refused, "error"
     try:
-        actions.act(session, run_id, action, kept, who, utcnow())
+        # The page sends the revision of the run it showed (fragments.actions): a run that
+        # changed since is refused (an independent trial: a clear sent from a page not yet
+        # refreshed freed a section that had gone to ALARM).
+        looks = [[seen]] if seen else []
+        actions.act(session, run_id, action, kept, who, utcnow(), seen=looks)
     except DepotError as exc:
         return f"Refused: {exc.detail}; nothing was recorded.", "error"
     if action == "sweep":
         return f"Run {run_id}: the section waits for a sweep train (asked by {who.name}).", "ok"
     return f"Run {run_id}: {DONE_WORDS[action]} by {who.name}.", "ok"
+
+
+class DecisionMessage(BaseModel):
+    """The form's answer to the page's script (asked with ``Accept: application/json``): a
+    refusal is shown in place, the run re-read and the typed reason kept."""
+
+    ok: bool
+    message: str
+    next: str  # where the page goes after a decision taken
 
 
 @router.post("/review/runs/{run_id}/decision")
@@ -206,14 +223,24 @@ def decide(
     run_id: RunId,
     action: Annotated[str, Form()],
     reason: Annotated[str, Form()] = "",
+    seen: Annotated[str, Form(max_length=200)] = "",
 ) -> Response:
     cookie = request.cookies.get(COOKIE)
     who = _who(request, session)
+    scripted = "application/json" in request.headers.get("accept", "")
     if who is None:
+        if scripted:
+            return JSONResponse({"detail": "logged out"}, status_code=401)
         return RedirectResponse("/review/login", status_code=303)
-    message, kind = _decide(session, who, run_id, action, reason)
+    message, kind = _decide(session, who, run_id, action, reason, seen)
+    after = request.url_for("review").include_query_params(run=run_id)
+    if scripted and kind == "error":
+        answer = DecisionMessage(ok=False, message=message, next=str(after))
+        return JSONResponse(answer.model_dump(), status_code=409)
     sessions.flash(session, cookie, message, kind)
-    return RedirectResponse(request.url_for("review").include_query_params(run=run_id), 303)
+    if scripted:
+        return JSONResponse(DecisionMessage(ok=True, message=message, next=str(after)).model_dump())
+    return RedirectResponse(after, 303)
 
 
 @router.get("/review/snapshots/{snapshot_id}/{which}")

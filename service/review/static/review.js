@@ -94,7 +94,7 @@
       // No run was shown: show the oldest waiting one, and aim the form at it.
       screen.dataset.run = String(data.run);
       var form = document.getElementById("decide");
-      if (form) { form.action = "/review/runs/" + data.run + "/decision"; }
+      if (form) { form.setAttribute("action", "/review/runs/" + data.run + "/decision"); }
     }
     document.title = data.title;
     updated.textContent = "updated " + data.updated;
@@ -102,11 +102,11 @@
     alerts(data.alerts);
   }
 
-  function poll() {
+  function update() {
     var url = "/review/live" + (screen.dataset.run ? "?run=" + screen.dataset.run : "");
     var abort = new AbortController();
     var timer = window.setTimeout(function () { abort.abort(); }, period);
-    fetch(url, { credentials: "same-origin", cache: "no-store", signal: abort.signal }).then(function (response) {
+    return fetch(url, { credentials: "same-origin", cache: "no-store", signal: abort.signal }).then(function (response) {
       if (response.status === 401) {
         banner.textContent = "Your session has ended: log in again to see the line.";
         throw new Error("logged out");
@@ -119,12 +119,17 @@
       watch();
     }).catch(function () { watch(); }).then(function () {
       window.clearTimeout(timer);
-      window.setTimeout(poll, period);
     });
   }
 
+  function poll() {
+    update().then(function () { window.setTimeout(poll, period); });
+  }
+
+  function isStale() { return Date.now() - lastOk > 2 * period; }
+
   function watch() {
-    var stale = Date.now() - lastOk > 2 * period;
+    var stale = isStale();
     body.classList.toggle("stale", stale);
     banner.hidden = !stale;
     // A decision taken on a screen that stopped updating is taken on old evidence: the
@@ -134,10 +139,57 @@
     });
   }
 
+  var refusal = document.getElementById("decision-refusal");
+
+  function refuse(message) {
+    refusal.textContent = message;
+    refusal.hidden = false;
+  }
+
+  // A decision is sent with the revision of the run the page shows (the hidden "seen" of the
+  // actions). Refused because the run changed (or for any reason), the refusal is shown in
+  // place and the run read again at once; the typed reason stays in its box.
+  function send(form, button) {
+    var data = new URLSearchParams(new FormData(form));
+    data.set("action", button.value);
+    document.querySelectorAll("button.act").forEach(function (b) { b.disabled = true; });
+    // getAttribute: the buttons named "action" shadow the form's own form.action
+    fetch(form.getAttribute("action"), {
+      method: "POST", body: data, credentials: "same-origin", cache: "no-store",
+      headers: { Accept: "application/json" },
+    }).then(function (response) {
+      if (response.status === 401) { window.location.assign("/review/login"); return null; }
+      return response.json().then(function (answer) {
+        if (response.ok && answer.ok) { window.location.assign(answer.next); return; }
+        refuse(answer.message || answer.detail || ("Refused (HTTP " + response.status + "): nothing was recorded."));
+        return update();
+      });
+    }).catch(function () {
+      refuse("The decision may not have reached the server: look at the run again before acting.");
+      return update();
+    });
+  }
+
   document.addEventListener("submit", function (event) {
+    var form = event.target;
     var button = event.submitter;
+    if (form.id !== "decide") {
+      return;
+    }
+    if (isStale()) {
+      // The banner says "do not act on them": a decision on this screen is not sent at all.
+      event.preventDefault();
+      refuse("This screen is not current: nothing was sent. Wait until it updates, then look again.");
+      return;
+    }
     if (button && button.dataset.confirm && !window.confirm(button.dataset.confirm)) {
       event.preventDefault();
+      return;
+    }
+    if (button && window.fetch) {
+      event.preventDefault();
+      refusal.hidden = true;
+      send(form, button);
     }
   });
 
