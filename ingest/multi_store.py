@@ -29,7 +29,7 @@ from ingest.batch_store import not_storable, stored_item, validated
 from ingest.handlers import Derivation, derive
 from ingest.holding import holding
 from ingest.liveness import touched_at_end
-from ingest.rows import as_raw, insert_each_that_stores, raw_values, write_answers
+from ingest.rows import as_raw, insert_each_that_stores, insert_many, raw_values, write_answers
 from ingest.store import answer_now, derive_new
 
 Result = dict[str, Any]
@@ -118,7 +118,14 @@ def _accept_batches(
         ident: _row(batches[b], index, event, body, transport)
         for ident, (b, index, event, body) in first.items()
     }
-    inserted, refused = insert_each_that_stores(session, list(rows.values()))
+    # The optimistic first pass of a broker batch takes no savepoint (a refused value fails it
+    # and every message is redone by itself, non-optimistic, where the value's item alone is
+    # refused).
+    inserted, refused = (
+        (insert_many(session, list(rows.values())), {})
+        if optimistic
+        else insert_each_that_stores(session, list(rows.values()))
+    )
     answers: list[Any] = []
     for ident, (b, index, event, body) in first.items():
         device = batches[b].device
