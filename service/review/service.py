@@ -179,6 +179,9 @@ def headline(session: Session, section: dict[str, Any]) -> str:
         return str(section["overdue"])
     if decision and decision["verdict"] != "complete" and reasons:
         return str(reasons[0])
+    waiting = section["fault_runs"] and session.get(Run, section["fault_runs"][0])
+    if waiting and waiting.conflict:  # after this run's own reasons: it is decided first
+        return f"run {waiting.id} waits behind this run: {waiting.conflict}"
     if section["state"] == "alarm":
         earlier = session.scalars(
             select(Run)
@@ -240,6 +243,7 @@ def build_screen(
     held = next((s for s in sections if run and s["id"] == run["section"]), None)
     released = found is not None and found.arrived_at is None
     released = released and found is not None and _may_act_unarrived(session, found, now)
+    released = released or (found is not None and occupancy.is_fault(found))  # no train
     actions = sensible_actions(held, run, overtaken=released) if role in DECIDERS else []
     confirm = {}
     if held and held["state"] in CONFIRM_CLEAR:
