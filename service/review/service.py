@@ -172,6 +172,9 @@ def headline(session: Session, section: dict[str, Any]) -> str:
     run = section["run"]
     decision = run["decision"] if run else None
     reasons = decision["reasons"] if decision else []
+    loss = _earlier_loss(session, section) if section["state"] == "alarm" else None
+    if loss and run and run["status"] == occupancy.FAULT:
+        return loss  # a proof of loss outranks an event that could not be processed
     conflict = _conflict_words(session, section)
     if conflict:
         return conflict
@@ -182,18 +185,25 @@ def headline(session: Session, section: dict[str, Any]) -> str:
     waiting = section["fault_runs"] and session.get(Run, section["fault_runs"][0])
     if waiting and waiting.conflict:  # after this run's own reasons: it is decided first
         return f"run {waiting.id} waits behind this run: {waiting.conflict}"
-    if section["state"] == "alarm":
-        earlier = session.scalars(
-            select(Run)
-            .where(Run.section == section["id"], Run.id != run["id"], Run.verdict == "incomplete")
-            .order_by(Run.id.desc())
-            .limit(1)
-        ).first()
-        if earlier is not None and earlier.reasons:
-            return f"run {earlier.id} (train {earlier.train}): {earlier.reasons[0]}"
+    if loss:
+        return loss
     if section["state"] in SETTLED_WORDS and decision and decision["verdict"] == "complete":
         return f"section {SETTLED_WORDS[section['state']]}; this run arrived complete"
     return str(reasons[0]) if reasons else ""
+
+
+def _earlier_loss(session: Session, section: dict[str, Any]) -> str | None:
+    """An earlier run's proof of loss that holds a section in alarm (its latest), in words."""
+    earlier = session.scalars(
+        select(Run)
+        .where(Run.section == section["id"], Run.id != section["run"]["id"])
+        .where(Run.verdict == "incomplete")
+        .order_by(Run.id.desc())
+        .limit(1)
+    ).first()
+    if earlier is None or not earlier.reasons:
+        return None
+    return f"run {earlier.id} (train {earlier.train}): {earlier.reasons[0]}"
 
 
 def _overdue(session: Session, section: dict[str, Any], now: datetime) -> str | None:

@@ -212,3 +212,25 @@ def test_a_failing_failure_handler_still_acks_and_keeps_the_raw_event(
     raw = session.scalar(select(RawEvent).where(RawEvent.event_id == event_id))
     assert raw is not None and raw.derive_error == answer["derive_error"]
     assert fault_runs(session) == [] and line.section()["state"] == "free"
+
+
+def test_late_proof_of_loss_outranks_the_fault_on_the_queue(
+    line: Line, breaker: Breaker, client: TestClient, session: Session
+) -> None:
+    train = _occupied(line)
+    breaker.kinds("eot_status")
+    breaker.ids.add(_next_id(line, "B-eot"))
+    line.post("B-eot", "eot_status", T0 + timedelta(minutes=5), section="AB", unit_address=7,
+              pressure_psig=60)  # fmt: skip
+    line.heartbeat_all(ARRIVE - timedelta(seconds=30))
+    line.read("B", [117, 118, 119, 120], ARRIVE - timedelta(seconds=40))
+    line.snapshot("B-cam", ARRIVE - timedelta(seconds=5), jpeg(disc=True, seed=2))
+    assert line.arrive(ARRIVE)["verdict"] == "complete"
+    assert line.section()["run"]["status"] == "fault"
+    late = line.post("B-ac", "axle_count", ARRIVE - timedelta(seconds=20), section="AB", axles=12)
+    assert late["reevaluated"]["verdict"] == "incomplete", late
+    assert line.section()["state"] == "alarm"
+    login(client, session, "taras")
+    page = client.get("/review").text
+    headline = page.split('<table id="queue">')[1].split("</table>")[0]
+    assert f"run {train} (train 2041)" in headline and "could not be processed" not in headline
