@@ -234,3 +234,20 @@ def test_late_proof_of_loss_outranks_the_fault_on_the_queue(
     page = client.get("/review").text
     headline = page.split('<table id="queue">')[1].split("</table>")[0]
     assert f"run {train} (train 2041)" in headline and "could not be processed" not in headline
+
+
+def test_a_failed_arrival_keeps_the_train_in_the_section_and_the_fault_behind_it(
+    line: Line, breaker: Breaker, dispatcher: dict[str, str]
+) -> None:
+    train = _occupied(line)
+    breaker.kinds("train_arrived")
+    breaker.ids.add(_next_id(line, "B-ilk"))
+    fault = line.arrive(ARRIVE)["fault_run"]
+    section = _queue_item(line)
+    assert section["run"]["id"] == train and section["run"]["status"] == "running"
+    assert section["fault_runs"] == [fault]
+    assert _decide(line, fault, "clear", dispatcher).status_code == 409
+    arrived = _complete_arrival(line)  # the interlocking reports the arrival again, new id
+    assert arrived["run"] == train and arrived["verdict"] == "complete", arrived
+    assert line.section()["run"]["id"] == fault, "the fault holds the section, not free"
+    assert _decide(line, fault, "clear", dispatcher).json()["state"] == "free"
