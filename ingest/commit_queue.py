@@ -102,8 +102,8 @@ class GroupCommitter:
             return outcomes
         except Exception as exc:
             session.rollback()
-            if len(group) == 1:
-                return [exc]
+            # Also a group of one: the group derives without a savepoint, and only the event's
+            # own transaction keeps a raw event whose derivation fails (201, derive_error).
             log.warning("group of %d events failed (%s); storing them one by one", len(group), exc)
         finally:
             session.close()

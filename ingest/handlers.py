@@ -4,6 +4,11 @@ Ingest knows the features only through a handler table: which handlers derive st
 which event model. The application builds that table explicitly (``service/features.py``) and
 installs it once at start-up (`install`); ingestion runs the handlers after the raw event row
 is stored, and ``depot replay`` runs them again to rebuild derived tables.
+
+A derivation that fails keeps the raw event (``ingest.store.run_derivation``), but the service
+has then lost evidence about the section the event names. The installed *failure handler*
+(:func:`derivation_failed`) is told of it, so that the section is put to a person rather than
+left looking clear; it runs in a savepoint of its own and its own failure is only logged.
 """
 
 from __future__ import annotations
@@ -13,13 +18,14 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from sqlalchemy.exc import InterfaceError, OperationalError, PendingRollbackError
 from sqlalchemy.orm import Session
 
 from core.errors import DepotError
 from core.models import Device
-from ingest.liveness import seen
+from ingest.liveness import restore_pending, seen, snapshot_pending
 from ingest.models import RawEvent, StoredRaw
-from ingest.schemas import ALL_EVENT_MODELS, EventBase, kind_of
+from ingest.schemas import ALL_EVENT_MODELS, EventBase, kind_of, section_of
 
 
 @dataclass(frozen=True)
@@ -51,12 +57,16 @@ ForesightTable = Mapping[type[EventBase], Foresight]
 # answers takes its sections' locks, in its lock order, before its rows are stored, so that a
 # foresight reads the runs as the derivations will; the derivations then find them held.
 SectionLock = Callable[[Session, str], object]
+# Told of an event naming a section whose derivation failed (the savepoint rolled back; the raw
+# event is kept with the error text given): what it reports joins the device's answer.
+FailureHandler = Callable[[Derivation, str], dict[str, Any] | None]
 log = logging.getLogger("depot.ingest")
 # The installed table, indexed by kind (filled by `install`; empty means liveness only).
 HANDLERS: dict[str, tuple[Handler, ...]] = {}
 VALIDATORS: dict[str, tuple[Validator, ...]] = {}
 FORESIGHTS: dict[str, Foresight] = {}
 SECTION_LOCK: list[SectionLock] = []
+FAILURE_HANDLERS: list[FailureHandler] = []
 
 
 def check_derivable(session: Session, event: Any) -> None:
@@ -70,11 +80,13 @@ def install(
     validators: ValidatorTable | None = None,
     foresights: ForesightTable | None = None,
     section_lock: SectionLock | None = None,
+    on_failure: FailureHandler | None = None,
 ) -> None:
     """Install the application's handler table; every event model must have an entry.
 
     An entry may be empty (the event only proves the device alive). Raises ValueError when a
     kind is missing or unknown, so a new event kind cannot be accepted and then ignored.
+    ``on_failure``: the failure handler of events naming a section (:func:`derivation_failed`).
     """
     missing = [kind_of(m) for m in ALL_EVENT_MODELS if m not in table]
     unknown = [model.__name__ for model in table if model not in ALL_EVENT_MODELS]
@@ -89,6 +101,7 @@ def install(
     if FORESIGHTS and section_lock is None:
         raise ValueError("foresights need the section lock their derivations take")
     SECTION_LOCK[:] = [] if section_lock is None else [section_lock]
+    FAILURE_HANDLERS[:] = [] if on_failure is None else [on_failure]
 
 
 def can_foresee(kind: str) -> bool:
@@ -168,3 +181,29 @@ def derive(derivation: Derivation) -> dict[str, Any]:
         replaying=derivation.replaying,
     )
     return result
+
+
+def derivation_failed(derivation: Derivation, error: str) -> dict[str, Any]:
+    """Tell the failure handler that deriving from an event naming a section failed (call it
+    after the derivation's savepoint rolled back); what it reports, or nothing.
+
+    In a savepoint of its own: should the handler fail too, that is logged and undone, and the
+    raw event and its acknowledgement stay (a failing database still propagates: then nothing
+    is acknowledged and the device retries)."""
+    if not FAILURE_HANDLERS or section_of(derivation.event) is None:
+        return {}
+    session = derivation.session
+    pending = snapshot_pending(session)
+    try:
+        with session.begin_nested():
+            return FAILURE_HANDLERS[0](derivation, error) or {}
+    except (OperationalError, InterfaceError, PendingRollbackError):
+        raise
+    except Exception:
+        log.exception(
+            "the failure handler of %s/%s failed; the raw event is kept",
+            derivation.device.id,
+            derivation.raw.event_id,
+        )
+        restore_pending(session, pending)
+        return {}

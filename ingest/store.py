@@ -17,7 +17,13 @@ from sqlalchemy.orm import Session
 from core.errors import Conflict
 from core.models import Device
 from ingest.checks import check_device_may_send, check_section, parse_event
-from ingest.handlers import Derivation, check_derivable, derive, has_handlers
+from ingest.handlers import (
+    Derivation,
+    check_derivable,
+    derivation_failed,
+    derive,
+    has_handlers,
+)
 from ingest.liveness import restore_pending, seen, snapshot_pending
 from ingest.models import RawEvent, StoredRaw
 from ingest.rows import (
@@ -128,7 +134,8 @@ def run_derivation(
     *,
     replaying: bool = False,
 ) -> dict[str, Any]:
-    """Derive state from a stored event; a failing derivation never loses the raw event."""
+    """Derive state from a stored event; a failing derivation never loses the raw event, and
+    the failure handler puts the section it names to a person (``derivation_failed``)."""
     derivation = Derivation(session, raw, event, device, replaying)
     if not has_handlers(raw.kind):
         return derive(derivation)  # liveness only: nothing that can fail half-way
@@ -141,8 +148,8 @@ def run_derivation(
     except Exception as exc:
         log.exception("deriving from %s/%s failed", device.id, raw.event_id)
         restore_pending(session, seen)
-        raw.derive_error = derive_error_text(exc)
-        return {"derive_error": raw.derive_error}
+        raw.derive_error = error = derive_error_text(exc)
+        return {"derive_error": error, **derivation_failed(derivation, error)}
 
 
 def derive_error_text(exc: Exception) -> str:

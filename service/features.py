@@ -10,8 +10,8 @@ from __future__ import annotations
 from ingest import handlers as ingest_handlers
 from ingest import schemas as ev
 from ingest.handlers import ForesightTable, HandlerTable, ValidatorTable
+from service.clearance import faults, tail
 from service.clearance import handlers as clearance
-from service.clearance import tail
 from service.clearance.locks import lock_section
 from service.fleet import handlers as fleet
 from service.setup import service as setup
@@ -49,7 +49,12 @@ FORESIGHT_TABLE: ForesightTable = {
 
 def install() -> None:
     """Install the tables into ingest (idempotent); called by the app factory and the CLI."""
+    # An event naming a section whose derivation failed puts the section to a person.
     ingest_handlers.install(
-        HANDLER_TABLE, VALIDATOR_TABLE, FORESIGHT_TABLE, section_lock=lock_section
+        HANDLER_TABLE,
+        VALIDATOR_TABLE,
+        FORESIGHT_TABLE,
+        section_lock=lock_section,
+        on_failure=faults.derivation_failed,
     )
     setup.CAR_REGISTERED[:] = [fleet.derive_waiting]

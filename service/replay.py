@@ -11,9 +11,10 @@ from sqlalchemy.orm import Session
 
 from core.auth import Principal
 from core.models import Device, Section
-from ingest.handlers import Derivation, derive
+from ingest.handlers import Derivation, derivation_failed, derive
 from ingest.models import RawEvent, Snapshot
 from ingest.schemas import EVENT_ADAPTER, TailSnapshot
+from ingest.store import derive_error_text
 from service.clearance import actions
 from service.clearance.models import (
     AuditRecord,
@@ -56,18 +57,32 @@ def reset_derived(session: Session) -> None:
     session.flush()
 
 
+def _derive(session: Session, raw: RawEvent) -> bool:
+    """Derive one raw event again; False when that fails. A failure puts the section it names
+    to a person again, as it did when the event came (``derivation_failed``: the same fault
+    run, whose audited decision the timeline then re-applies). The raw row is not touched."""
+    device = session.get_one(Device, raw.device_id)
+    try:
+        event = _parse(raw)
+    except Exception:
+        return False
+    derivation = Derivation(session, raw, event, device, replaying=True)
+    try:
+        with session.begin_nested():
+            derive(derivation)
+    except Exception as exc:
+        derivation_failed(derivation, derive_error_text(exc))
+        return False
+    return True
+
+
 def replay(session: Session, *, progress: Any = None) -> dict[str, int]:
     """Rebuild derived state; raw events and audit records themselves are never touched."""
     reset_derived(session)
     counts = {"events": 0, "failed": 0, "actions": 0, "refused_actions": 0}
     for _, source, ident in _timeline(session):
         if source == 0:
-            raw = session.get_one(RawEvent, ident)
-            device = session.get_one(Device, raw.device_id)
-            try:
-                with session.begin_nested():
-                    derive(Derivation(session, raw, _parse(raw), device, replaying=True))
-            except Exception:
+            if not _derive(session, session.get_one(RawEvent, ident)):
                 counts["failed"] += 1
             counts["events"] += 1
         else:

@@ -14,6 +14,7 @@ from service.clearance.attribution import forget_runs
 from service.clearance.evidence import gather
 from service.clearance.locks import lock_section
 from service.clearance.models import AuditRecord, Run
+from service.clearance.occupancy import is_fault
 from service.clearance.refusals import ACTION_STATES, check_action
 from service.clearance.revision import check_seen
 from service.clearance.service import promote_conflict, set_state
@@ -58,7 +59,8 @@ def act(
     gathered = gather(session, run, section)
     set_state(section, ACTION_STATES[action], at)
     run.auto = False
-    if run.arrived_at is None and not (missing and action == "keep_blocked"):
+    unarrived = run.arrived_at is None and not is_fault(run)  # a fault run is no train
+    if unarrived and not (missing and action == "keep_blocked"):
         # Released without an arrival: it holds the section no more. A silent section's
         # train kept blocked still does: its arrival, if it ever comes, closes its run.
         run.status = "overtaken"

@@ -23,6 +23,15 @@ from ingest.models import RawEvent
 from service.clearance.attribution import IN_SECTION, skewed_apart
 from service.clearance.models import Run
 
+# The status of a *fault run*: an event naming the section whose derivation failed
+# (``service.clearance.faults``). It is no train: never attached evidence, never in the section
+# by time (no arrival, and not ``IN_SECTION``), but it waits for a person like a conflict does.
+FAULT = "fault"
+
+
+def is_fault(run: Run) -> bool:
+    return run.status == FAULT
+
 
 def is_open(run: Run, section: Section) -> bool:
     """Not resolved yet: waiting behind the current run, or current in a section not free."""
@@ -74,7 +83,7 @@ def follower_at(session: Session, run: Run) -> Run | None:
     (``early_arrival``), else at any time — an arrival not seen proves nothing."""
     early = early_arrival(session, run, before=run.id)
     query = select(Run).where(Run.section == run.section, Run.id != run.id)
-    query = query.where(Run.departed_at > run.departed_at)
+    query = query.where(Run.departed_at > run.departed_at, Run.status != FAULT)
     if early is not None:
         query = query.where(Run.departed_at < early.occurred_at)
     return session.scalar(query.order_by(Run.departed_at, Run.id).limit(1))
@@ -206,10 +215,12 @@ def overtaken(session: Session, run: Run) -> bool:
 
 def next_waiting(session: Session, section: Section) -> Run | None:
     """The run that takes the section when its current run is resolved: the first that
-    departed of those waiting behind it."""
+    departed of those waiting behind it, or the first fault run nobody has decided yet."""
+    current = section.current_run_id or 0  # raw ids start at 1 (``!= NULL`` matches nothing)
+    undecided = and_(Run.status == FAULT, Run.auto.is_(True), Run.id != current)
     return session.scalar(
         select(Run)
-        .where(Run.section == section.id, Run.status == "conflict")
+        .where(Run.section == section.id, or_(Run.status == "conflict", undecided))
         .order_by(Run.departed_at, Run.id)
         .limit(1)
     )

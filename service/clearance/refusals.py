@@ -34,9 +34,14 @@ def check_action(
             f" {section.current_run_id} first"
         )
     if section.current_run_id != run.id:
-        raise Conflict(f"run {run.id} is not the current run of section {section.id}")
+        first = f": decide run {section.current_run_id} first" if occupancy.is_fault(run) else ""
+        raise Conflict(f"run {run.id} is not the current run of section {section.id}{first}")
     missing = None
-    if run.arrived_at is None and not occupancy.overtaken(session, run):
+    if (
+        run.arrived_at is None
+        and not occupancy.is_fault(run)
+        and not occupancy.overtaken(session, run)
+    ):
         missing = overdue(session, run, at)
         if missing is None:
             raise Conflict(

@@ -53,8 +53,10 @@ class RunOut(Answer):
         description="running, arrived, conflict (departed into a section that was not cleared"
         " and waits behind its current run, arrived or not: see arrived_at), overtaken"
         " (its arrival never came, a train behind it arrived or its section fell silent, and a"
-        " dispatcher released it), or explained (the run of an arrival nobody saw enter, acted"
-        " on by a person, whose departure came later and took the arrival)"
+        " dispatcher released it), explained (the run of an arrival nobody saw enter, acted"
+        " on by a person, whose departure came later and took the arrival), or fault (no train:"
+        " an event naming the section could not be processed — its derive_error — and a person"
+        " must look; conflict holds the words, and a dispatcher decides it like any run)"
     )
     conflict: str | None = Field(
         default=None,
@@ -108,6 +110,12 @@ class SectionOut(Answer):
     state_since: Instant | None
     last_run_id: int | None
     conflict_runs: list[int]
+    fault_runs: list[int] = Field(
+        default_factory=list,
+        description="fault runs nobody has decided yet that wait behind the current run:"
+        " events naming the section that could not be processed (the section is not free"
+        " until a dispatcher has decided each)",
+    )
     run: RunOut | None
 
 

@@ -299,11 +299,15 @@ def evaluate(
 def promote_conflict(session: Session, section: Section, at: datetime) -> None:
     """When the current run is resolved, the first train waiting behind it (a conflict) holds
     the section: still running (``occupied``), or arrived and decided — then the section
-    follows that decision, which is never ``complete`` for a conflict (a person must look)."""
+    follows that decision, which is never ``complete`` for a conflict (a person must look).
+    A fault run nobody decided yet (``faults``) holds it in ``review``."""
     waiting = occupancy.next_waiting(session, section)
     if waiting is None:
         return
     section.current_run_id = waiting.id
+    if occupancy.is_fault(waiting):  # an event that could not be processed: a person looks
+        set_state(section, "review", at)
+        return
     if waiting.arrived_at is None:
         waiting.status = "running"
         set_state(section, "occupied", at)

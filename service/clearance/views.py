@@ -12,6 +12,7 @@ from core.models import Section
 from core.schemas import format_optional_instant
 from service.clearance import unseen
 from service.clearance.models import AuditRecord, Run
+from service.clearance.occupancy import FAULT
 from service.clearance.revision import revision
 
 QUEUE_STATES = ("alarm", "review", "awaiting_confirmation", "blocked")
@@ -89,6 +90,13 @@ def section_out(session: Session, section: Section) -> dict[str, Any]:
     conflicts = session.scalars(
         select(Run.id).where(Run.section == section.id, Run.status == "conflict")
     ).all()
+    # Events that could not be processed, waiting for a person behind the current run.
+    faults = session.scalars(
+        select(Run.id)
+        .where(Run.section == section.id, Run.status == FAULT, Run.auto.is_(True))
+        .where(Run.id != (section.current_run_id or 0))
+        .order_by(Run.departed_at, Run.id)
+    ).all()
     return {
         "id": section.id,
         "state": section.state,
@@ -98,5 +106,6 @@ def section_out(session: Session, section: Section) -> dict[str, Any]:
         "state_since": _iso(section.state_since),
         "last_run_id": section.current_run_id,
         "conflict_runs": list(conflicts),
+        "fault_runs": list(faults),
         "run": run,
     }

@@ -172,6 +172,9 @@ def headline(session: Session, section: dict[str, Any]) -> str:
     run = section["run"]
     decision = run["decision"] if run else None
     reasons = decision["reasons"] if decision else []
+    loss = _earlier_loss(session, section) if section["state"] == "alarm" else None
+    if loss and run and run["status"] == occupancy.FAULT:
+        return loss  # a proof of loss outranks an event that could not be processed
     conflict = _conflict_words(session, section)
     if conflict:
         return conflict
@@ -179,18 +182,28 @@ def headline(session: Session, section: dict[str, Any]) -> str:
         return str(section["overdue"])
     if decision and decision["verdict"] != "complete" and reasons:
         return str(reasons[0])
-    if section["state"] == "alarm":
-        earlier = session.scalars(
-            select(Run)
-            .where(Run.section == section["id"], Run.id != run["id"], Run.verdict == "incomplete")
-            .order_by(Run.id.desc())
-            .limit(1)
-        ).first()
-        if earlier is not None and earlier.reasons:
-            return f"run {earlier.id} (train {earlier.train}): {earlier.reasons[0]}"
+    waiting = section["fault_runs"] and session.get(Run, section["fault_runs"][0])
+    if waiting and waiting.conflict:  # after this run's own reasons: it is decided first
+        return f"run {waiting.id} waits behind this run: {waiting.conflict}"
+    if loss:
+        return loss
     if section["state"] in SETTLED_WORDS and decision and decision["verdict"] == "complete":
         return f"section {SETTLED_WORDS[section['state']]}; this run arrived complete"
     return str(reasons[0]) if reasons else ""
+
+
+def _earlier_loss(session: Session, section: dict[str, Any]) -> str | None:
+    """An earlier run's proof of loss that holds a section in alarm (its latest), in words."""
+    earlier = session.scalars(
+        select(Run)
+        .where(Run.section == section["id"], Run.id != section["run"]["id"])
+        .where(Run.verdict == "incomplete")
+        .order_by(Run.id.desc())
+        .limit(1)
+    ).first()
+    if earlier is None or not earlier.reasons:
+        return None
+    return f"run {earlier.id} (train {earlier.train}): {earlier.reasons[0]}"
 
 
 def _overdue(session: Session, section: dict[str, Any], now: datetime) -> str | None:
@@ -240,6 +253,7 @@ def build_screen(
     held = next((s for s in sections if run and s["id"] == run["section"]), None)
     released = found is not None and found.arrived_at is None
     released = released and found is not None and _may_act_unarrived(session, found, now)
+    released = released or (found is not None and occupancy.is_fault(found))  # no train
     actions = sensible_actions(held, run, overtaken=released) if role in DECIDERS else []
     confirm = {}
     if held and held["state"] in CONFIRM_CLEAR:
