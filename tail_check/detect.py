@@ -13,7 +13,7 @@ weak evidence yields ``uncertain`` and poor images lower the confidence of ``abs
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import cv2
@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .colour import band_mask
+from .lamps import LAMP_CHECK, lamp_reason
 from .pixels import channel_extreme, percentile_u8, std_u8, subtract_level, veil_level
 from .profile import DEFAULT_PROFILE, CameraProfile
 from .regions import DiscCandidate, find_candidates
@@ -203,6 +204,8 @@ def _verdict(
     best: DiscCandidate | None, quality: float, notes: list[str], p: CameraProfile
 ) -> tuple[Verdict, float, list[str]]:
     disc = best.score if best is not None else 0.0
+    if best is not None and best.glow is not None:
+        return "uncertain", disc, [best.glow, *notes]
     if best is not None and disc >= p.present_threshold:
         if max(best.bbox[2:]) < MIN_RESOLVED_PX:
             return "uncertain", disc, ["disc-like red region too few pixels across to be sure"]
@@ -215,6 +218,34 @@ def _verdict(
     return "absent", (1.0 - disc) * quality, [reason, *notes]
 
 
+def _without_lamps(
+    found: list[DiscCandidate],
+    work: NDArray[np.uint8],
+    p: CameraProfile,
+    *,
+    origin: tuple[int, int],
+    scale: float,
+) -> list[DiscCandidate]:
+    """Candidates best first, each that would be ``present`` but is a lit lamp (a clipped
+    core fading out in a glow, :mod:`tail_check.lamps`) held just below the threshold."""
+    if not any(c.score >= p.present_threshold and c.glow is None for c in found):
+        return sorted(found, key=lambda c: -c.score)
+    value = channel_extreme(work, cv2.max).astype(np.float32)
+    below = math.nextafter(p.present_threshold, 0.0)
+    out = []
+    for c in found:
+        if c.score >= p.present_threshold and c.glow is None:
+            x, y, w, h = c.bbox
+            # Box centre in working pixels (pixel centres at integer coordinates).
+            centre = ((x - origin[0] + w / 2) * scale - 0.5, (y - origin[1] + h / 2) * scale - 0.5)
+            radius = c.diameter * WORK_SIDE / 2
+            reason = lamp_reason(value, centre, radius, WORK_SIDE, LAMP_CHECK)
+            if reason is not None:
+                c = replace(c, score=min(c.score, below), glow=reason)
+        out.append(c)
+    return sorted(out, key=lambda c: -c.score)
+
+
 def _search(
     smooth: NDArray[np.uint8],
     clear: NDArray[np.uint8],
@@ -222,11 +253,13 @@ def _search(
     valley_free: NDArray[np.bool_],
     p: CameraProfile,
     *,
+    work: NDArray[np.uint8],
     origin: tuple[int, int],
     scale: float,
     sigma_px: float,
 ) -> list[DiscCandidate]:
-    """All candidate passes, best first: camera band, wider seed band, rim search."""
+    """All candidate passes, best first: camera band, wider seed band, rim search. A lit
+    lamp never settles the search: the real disc may still be found beside it."""
     found = find_candidates(
         band & valley_free,
         band,
@@ -237,6 +270,7 @@ def _search(
         scale=scale,
         work_side=WORK_SIDE,
     )
+    found = _without_lamps(found, work, p, origin=origin, scale=scale)
 
     def settled() -> bool:
         return bool(found) and found[0].score >= p.present_threshold
@@ -257,7 +291,7 @@ def _search(
             scale=scale,
             work_side=WORK_SIDE,
         )
-        found.sort(key=lambda c: -c.score)
+        found = _without_lamps(found, work, p, origin=origin, scale=scale)
     red_share = float(np.count_nonzero(band)) / max(1.0, float(band.size))
     if red_share > RED_BODY_SHARE and not settled():
         sharp_red = np.asarray(
@@ -268,7 +302,7 @@ def _search(
         found += rim_candidates(
             wide, smooth, sharp_red, p, origin=origin, scale=scale, work_side=WORK_SIDE
         )
-        found.sort(key=lambda c: -c.score)
+        found = _without_lamps(found, work, p, origin=origin, scale=scale)
     return found
 
 
@@ -328,7 +362,15 @@ def detect_reduced(
     mask = band & valley_free
     accepted = float(np.count_nonzero(mask))
     candidates = _search(
-        smooth, clear, band, valley_free, p, origin=box[:2], scale=scale, sigma_px=sigma_px
+        smooth,
+        clear,
+        band,
+        valley_free,
+        p,
+        work=work,
+        origin=box[:2],
+        scale=scale,
+        sigma_px=sigma_px,
     )
     quality, notes = _quality(smooth, accepted / max(1.0, float(mask.size)))
     best = candidates[0] if candidates else None
