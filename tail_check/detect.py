@@ -13,7 +13,7 @@ weak evidence yields ``uncertain`` and poor images lower the confidence of ``abs
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import cv2
@@ -21,10 +21,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .colour import band_mask
+from .lamps import LAMP_CHECK, lamp_reason
 from .pixels import channel_extreme, percentile_u8, std_u8, subtract_level, veil_level
 from .profile import DEFAULT_PROFILE, CameraProfile
 from .regions import DiscCandidate, find_candidates
 from .rims import rim_candidates
+from .seeds import Band, in_band, seed_passes
 from .shape import ramp
 
 __all__ = [
@@ -40,8 +42,6 @@ __all__ = [
 Verdict = Literal["present", "absent", "uncertain"]
 BBox = tuple[int, int, int, int]
 
-WIDE_SEED = 1.4
-"""Seed band width for the second pass, in multiples of the profile's c_Δ."""
 RED_BODY_SHARE = 0.12
 """Share of the search region in the disc's colour above which a red car body is assumed
 and the disc is also searched by its rim."""
@@ -203,6 +203,8 @@ def _verdict(
     best: DiscCandidate | None, quality: float, notes: list[str], p: CameraProfile
 ) -> tuple[Verdict, float, list[str]]:
     disc = best.score if best is not None else 0.0
+    if best is not None and best.glow is not None:
+        return "uncertain", disc, [best.glow, *notes]
     if best is not None and disc >= p.present_threshold:
         if max(best.bbox[2:]) < MIN_RESOLVED_PX:
             return "uncertain", disc, ["disc-like red region too few pixels across to be sure"]
@@ -215,6 +217,34 @@ def _verdict(
     return "absent", (1.0 - disc) * quality, [reason, *notes]
 
 
+def _without_lamps(
+    found: list[DiscCandidate],
+    work: NDArray[np.uint8],
+    p: CameraProfile,
+    *,
+    origin: tuple[int, int],
+    scale: float,
+) -> list[DiscCandidate]:
+    """Candidates best first, each that would be ``present`` but is a lit lamp (a clipped
+    core fading out in a glow, :mod:`tail_check.lamps`) held just below the threshold."""
+    if not any(c.score >= p.present_threshold and c.glow is None for c in found):
+        return sorted(found, key=lambda c: -c.score)
+    value = channel_extreme(work, cv2.max).astype(np.float32)
+    below = math.nextafter(p.present_threshold, 0.0)
+    out = []
+    for c in found:
+        if c.score >= p.present_threshold and c.glow is None:
+            x, y, w, h = c.bbox
+            # Box centre in working pixels (pixel centres at integer coordinates).
+            centre = ((x - origin[0] + w / 2) * scale - 0.5, (y - origin[1] + h / 2) * scale - 0.5)
+            radius = c.diameter * WORK_SIDE / 2
+            reason = lamp_reason(value, centre, radius, WORK_SIDE, LAMP_CHECK)
+            if reason is not None:
+                c = replace(c, score=min(c.score, below), glow=reason)
+        out.append(c)
+    return sorted(out, key=lambda c: -c.score)
+
+
 def _search(
     smooth: NDArray[np.uint8],
     clear: NDArray[np.uint8],
@@ -222,34 +252,20 @@ def _search(
     valley_free: NDArray[np.bool_],
     p: CameraProfile,
     *,
+    work: NDArray[np.uint8],
     origin: tuple[int, int],
     scale: float,
     sigma_px: float,
 ) -> list[DiscCandidate]:
-    """All candidate passes, best first: camera band, wider seed band, rim search."""
-    found = find_candidates(
-        band & valley_free,
-        band,
-        smooth,
-        valley_free,
-        p,
-        origin=origin,
-        scale=scale,
-        work_side=WORK_SIDE,
-    )
+    """All candidate passes, best first: camera band, wider and pale seed bands, rim
+    search. A lit lamp never settles the search: the real disc may still be found."""
 
-    def settled() -> bool:
-        return bool(found) and found[0].score >= p.present_threshold
-
-    wide = band
-    if not settled():
-        # Fog, rain and faded paint move a real disc just off the camera band; seeds
-        # from a wider band are re-extracted with their own colour at c_Δ and must
-        # pass the same disc checks, so the wider band only finds, never accepts.
-        wide = band_mask(smooth, p.reference_rgb, WIDE_SEED * p.c_delta, gain_range=p.gain_range)
-        found += find_candidates(
-            wide & valley_free,
-            wide,
+    def seeded(
+        seed_band: NDArray[np.bool_], found: list[DiscCandidate], colour: Band | None = None
+    ) -> list[DiscCandidate]:
+        more = find_candidates(
+            seed_band & valley_free,
+            seed_band,
             smooth,
             valley_free,
             p,
@@ -257,9 +273,23 @@ def _search(
             scale=scale,
             work_side=WORK_SIDE,
         )
-        found.sort(key=lambda c: -c.score)
+        if colour is not None:  # a seed's blurred edge can lead anywhere: keep its colour
+            more = [c for c in more if in_band(c.mean_rgb, colour)]
+        return _without_lamps(found + more, work, p, origin=origin, scale=scale)
+
+    def settled(found: list[DiscCandidate]) -> bool:
+        return bool(found) and found[0].score >= p.present_threshold
+
+    found = seeded(band, [])
+    wide = band
+    for index, (seed, gate) in enumerate(seed_passes(p)):
+        if settled(found):
+            break
+        seeds = band_mask(smooth, seed[0], seed[1], gain_range=seed[2])
+        wide = seeds if index == 0 else wide
+        found = seeded(seeds, found, gate)
     red_share = float(np.count_nonzero(band)) / max(1.0, float(band.size))
-    if red_share > RED_BODY_SHARE and not settled():
+    if red_share > RED_BODY_SHARE and not settled(found):
         sharp_red = np.asarray(
             cv2.GaussianBlur(clear[..., 2], (0, 0), min(sigma_px, 0.8)), dtype=np.uint8
         )
@@ -268,7 +298,7 @@ def _search(
         found += rim_candidates(
             wide, smooth, sharp_red, p, origin=origin, scale=scale, work_side=WORK_SIDE
         )
-        found.sort(key=lambda c: -c.score)
+        found = _without_lamps(found, work, p, origin=origin, scale=scale)
     return found
 
 
@@ -328,7 +358,15 @@ def detect_reduced(
     mask = band & valley_free
     accepted = float(np.count_nonzero(mask))
     candidates = _search(
-        smooth, clear, band, valley_free, p, origin=box[:2], scale=scale, sigma_px=sigma_px
+        smooth,
+        clear,
+        band,
+        valley_free,
+        p,
+        work=work,
+        origin=box[:2],
+        scale=scale,
+        sigma_px=sigma_px,
     )
     quality, notes = _quality(smooth, accepted / max(1.0, float(mask.size)))
     best = candidates[0] if candidates else None

@@ -52,6 +52,9 @@ class DiscCandidate:
     surround : float
         Share of a ring around the region covered by the same paint (0 for an
         isolated disc).
+    glow : str or None
+        Why the region is a lit lamp rather than a disc (:mod:`tail_check.lamps`); such
+        a candidate's score is held below the ``present`` threshold.
     """
 
     bbox: BBox
@@ -60,6 +63,7 @@ class DiscCandidate:
     shape: RegionShape
     mean_rgb: tuple[float, float, float]
     surround: float
+    glow: str | None = None
 
 
 def disc_score(shape: RegionShape, diameter: float, surround: float, p: CameraProfile) -> float:

@@ -123,14 +123,24 @@ def test_real_photos_are_split_in_two_disjoint_halves() -> None:
         next(real_photos("test"))  # type: ignore[arg-type]
 
 
+def test_hand_tuned_detector_never_calls_a_lit_lamp_a_disc() -> None:
+    """Generator B's seed 300535: a lit electric tail lamp mid-body at dusk (a clipped
+    core fading out in a glow, see :mod:`tail_check.lamps`)."""
+    sample = next(scenes("B", "heldout", 1, offset=535))
+    assert not sample.disc and sample.kind == "tail_lamp" and sample.condition == "dusk"
+    result = detect(sample.image)
+    assert result.verdict == "uncertain" and "lit lamp" in result.reasons[0]
+
+
 @pytest.mark.xfail(
     strict=True,
     reason="known false present of the hand-tuned detector (the service's) on generator B's"
-    " fresh held-out seeds: a lit signal head beside the track and a lit electric tail lamp"
-    " mid-body, both at dusk, are called discs (found by the tail-accuracy helper, issue 11)",
+    " held-out seed 300498: a lit signal head beside the track at dusk, 13 working pixels"
+    " across. Its glow is as narrow as the blurred outline of a disc that size (1.9 working"
+    " pixels; discs with a shining reflector measure 1.7-3.3), so the lamp check cannot tell"
+    " it from the small lit discs it must keep (issue 11)",
 )
-@pytest.mark.parametrize(("seed", "kind"), [(300498, "signal_light"), (300535, "tail_lamp")])
-def test_hand_tuned_detector_never_calls_a_lit_lamp_a_disc(seed: int, kind: str) -> None:
-    sample = next(scenes("B", "heldout", 1, offset=seed - 300000))
-    assert not sample.disc and sample.kind == kind and sample.condition == "dusk"
+def test_hand_tuned_detector_never_calls_a_small_lit_signal_a_disc() -> None:
+    sample = next(scenes("B", "heldout", 1, offset=498))
+    assert not sample.disc and sample.kind == "signal_light" and sample.condition == "dusk"
     assert detect(sample.image).verdict != "present"
