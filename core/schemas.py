@@ -42,11 +42,16 @@ class StrictModel(BaseModel):
         # cannot be stored or looked up" by the database, naming no field. Refused here, for
         # every person's body (reasons, station and person names, fleet texts), by field.
         if holds_nul(value):
-            raise PydanticCustomError(
-                "nul_character",
-                "holds a NUL character (U+0000), which cannot be stored; send the text without it",
-            )
+            raise nul_character()
         return value
+
+
+def nul_character() -> PydanticCustomError:
+    """The refusal of a text holding U+0000, one wording for people's bodies and device events."""
+    return PydanticCustomError(
+        "nul_character",
+        "holds a NUL character (U+0000), which cannot be stored; send the text without it",
+    )
 
 
 def holds_nul(value: Any) -> bool:

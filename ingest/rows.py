@@ -155,14 +155,17 @@ def insert_each_that_stores(
             with session.begin_nested():
                 inserted.update(insert_many(session, [row]))
         except DataError as exc:
-            refused[(row["device_id"], row["event_id"])] = first_line(exc)
+            refused[(row["device_id"], row["event_id"])] = first_line(exc) or type(exc).__name__
     return inserted, refused
 
 
-def first_line(exc: DBAPIError) -> str:
-    """The database's own first line of an error, without SQLAlchemy's statement dump."""
-    text = str(exc.orig if exc.orig is not None else exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__
+def first_line(exc: Exception) -> str:
+    """An error's first line, for a database error the database's own (never the SQL statement
+    and its parameters, which SQLAlchemy appends and which are the service's internals); empty
+    for an error without words."""
+    orig = exc.orig if isinstance(exc, DBAPIError) else None
+    text = str(orig if orig is not None else exc).strip().splitlines()
+    return text[0] if text else ""
 
 
 def stored(session: Session, device_id: str, event_id: str) -> tuple[str, dict[str, Any]]:

@@ -22,6 +22,7 @@ from pydantic import (
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
 from core.models import DEVICE_KINDS
+from core.schemas import nul_character
 from identification.eot_packet import PACKET_BITS, parse_packet
 from motion.samples import SAMPLE_LIMITS, sample_problem
 
@@ -105,15 +106,14 @@ class EventBase(BaseModel):
         # stored but could not be derived, and left its section free (an independent trial).
         # Refused here, naming the field, on every transport and per item of a batch.
         if _holds_nul(value):
-            raise PydanticCustomError(
-                "nul_character",
-                "holds a NUL character (U+0000), which cannot be stored; send the text without it",
-            )
+            raise nul_character()
         return value
 
 
 def _holds_nul(value: Any) -> bool:
-    """Whether a field's value (text, or a list or mapping of texts) holds U+0000."""
+    """Whether a field's value (text, or a list or mapping of texts) holds U+0000. Unlike
+    :func:`core.schemas.holds_nul` a list is looked into only when its first item is text or a
+    container: device events carry long lists of numbers (pulses, samples) on the hot path."""
     if isinstance(value, str):
         return "\x00" in value
     if isinstance(value, dict):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import logging
 from typing import Any
 
-from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError, PendingRollbackError
+from sqlalchemy.exc import InterfaceError, OperationalError, PendingRollbackError
 from sqlalchemy.orm import Session
 
 from core.errors import Conflict
@@ -30,6 +30,7 @@ from ingest.rows import (
     as_raw,
     canonical_sha256,
     event_sha256,
+    first_line,
     insert_one,
     raw_values,
     stored,
@@ -154,11 +155,8 @@ def run_derivation(
 
 def derive_error_text(exc: Exception) -> str:
     """What a device and the event log are told of a failed derivation: the error's kind and
-    the database's own first line, never the SQL statement and its parameters (which
-    SQLAlchemy appends to its errors, and which are the service's internals)."""
-    orig = exc.orig if isinstance(exc, DBAPIError) else None
-    text = str(orig if orig is not None else exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
+    its first line (:func:`ingest.rows.first_line`)."""
+    return f"{type(exc).__name__}: {first_line(exc)}".rstrip(": ")
 
 
 def accept_event(
