@@ -10,11 +10,22 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+import httpx
 import uvicorn
 
 from core import database
 from core.settings import get_settings
 from service.migrate import upgrade
+
+HTTP_TIMEOUT_S = 30.0
+"""How long a test's request to the live server may take. The server shares the test's
+process and a loaded 2-core CI machine with Chromium: a snapshot upload once took more
+than httpx's default 5 s there, which says nothing about the screen under test."""
+
+
+def live_client(url: str) -> httpx.Client:
+    """A client of the live server at ``url`` with :data:`HTTP_TIMEOUT_S`."""
+    return httpx.Client(base_url=url, timeout=HTTP_TIMEOUT_S)
 
 
 def _free_port() -> int:

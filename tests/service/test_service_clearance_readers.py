@@ -53,7 +53,7 @@ CARS = [117, 118, 119]
 
 def test_readers_that_agree_free_the_section(line: Line) -> None:
     run = _passage(line, (CARS, CARS), (CARS, CARS))
-    assert run["decision"]["verdict"] == "complete", run
+    assert run["decision"]["verdict"] == "complete", run["decision"]
     assert line.section()["state"] == "free"
 
 

@@ -14,7 +14,7 @@ from core.settings import get_settings
 from service.demo import load_demo
 from service.setup.service import create_user
 from tests.service.linekit import build_line
-from tests.service.livekit import live_server
+from tests.service.livekit import HTTP_TIMEOUT_S, live_client, live_server
 from tests.service.reviewkit import late_photo_without_disc, review_run
 from tests.service.scenario import Line
 
@@ -49,7 +49,10 @@ def test_dispatcher_blocks_the_alarm_and_clears_another(tmp_path: Path) -> None:
             token = create_user(session, "olena", "dispatcher")
         admin = {"Authorization": f"Bearer {get_settings().admin_token}"}
         states = {
-            s["id"]: s["state"] for s in httpx.get(f"{url}/api/v1/sections", headers=admin).json()
+            s["id"]: s["state"]
+            for s in httpx.get(
+                f"{url}/api/v1/sections", headers=admin, timeout=HTTP_TIMEOUT_S
+            ).json()
         }
         assert states == {"AB": "alarm", "BC": "review"}, states
 
@@ -89,10 +92,13 @@ def test_dispatcher_blocks_the_alarm_and_clears_another(tmp_path: Path) -> None:
             browser.close()
 
         states = {
-            s["id"]: s["state"] for s in httpx.get(f"{url}/api/v1/sections", headers=admin).json()
+            s["id"]: s["state"]
+            for s in httpx.get(
+                f"{url}/api/v1/sections", headers=admin, timeout=HTTP_TIMEOUT_S
+            ).json()
         }
         assert states == {"AB": "blocked", "BC": "free"}, states
-        audit = httpx.get(f"{url}/api/v1/audit", headers=admin).json()
+        audit = httpx.get(f"{url}/api/v1/audit", headers=admin, timeout=HTTP_TIMEOUT_S).json()
         assert [(a["section"], a["action"], a["actor"]) for a in audit[:2]] == [
             ("BC", "clear", "olena"),
             ("AB", "keep_blocked", "olena"),
@@ -118,7 +124,7 @@ def test_screen_updates_in_place_keeps_the_draft_alerts_and_turns_stale(
         )
         context = browser.new_context(viewport={"width": 1366, "height": 768})
         page = context.new_page()
-        with live_server(tmp_path) as url, httpx.Client(base_url=url) as http:
+        with live_server(tmp_path) as url, live_client(url) as http:
             context.grant_permissions(["notifications"], origin=url)
             line = Line(http, build_line(http))  # type: ignore[arg-type]
             run = review_run(line)
@@ -178,7 +184,7 @@ def test_the_queue_is_the_first_thing_seen_on_a_long_line(tmp_path: Path) -> Non
     said "oldest first" while it is most urgent first."""
     from playwright.sync_api import expect, sync_playwright
 
-    with live_server(tmp_path) as url, httpx.Client(base_url=url) as http:
+    with live_server(tmp_path) as url, live_client(url) as http:
         line = Line(http, build_line(http))  # type: ignore[arg-type]
         admin = {"Authorization": f"Bearer {get_settings().admin_token}"}
         for i in range(30):

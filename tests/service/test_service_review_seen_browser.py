@@ -16,7 +16,7 @@ from core.database import get_sessionmaker
 from core.settings import get_settings
 from service.setup.service import create_user
 from tests.service.linekit import build_line
-from tests.service.livekit import live_server
+from tests.service.livekit import HTTP_TIMEOUT_S, live_client, live_server
 from tests.service.reviewkit import late_photo_without_disc, review_run
 from tests.service.scenario import Line
 from tests.service.test_service_review_browser import CHROMIUM, CHROMIUM_ARGS
@@ -36,7 +36,9 @@ REASON = "camera image looked ok to me"
 
 def _audit(url: str) -> list[dict[str, Any]]:
     admin = {"Authorization": f"Bearer {get_settings().admin_token}"}
-    answer: list[dict[str, Any]] = httpx.get(f"{url}/api/v1/audit", headers=admin).json()
+    answer: list[dict[str, Any]] = httpx.get(
+        f"{url}/api/v1/audit", headers=admin, timeout=HTTP_TIMEOUT_S
+    ).json()
     return answer
 
 
@@ -56,7 +58,7 @@ def test_a_clear_from_a_page_drawn_before_the_alarm_is_refused(
     monkeypatch.setenv("DEPOT_REVIEW_REFRESH_S", str(SLOW_PERIOD_S))
     with (
         live_server(tmp_path) as url,
-        httpx.Client(base_url=url) as http,
+        live_client(url) as http,
         sync_playwright() as playwright,
     ):
         line = Line(http, build_line(http))  # type: ignore[arg-type]
@@ -111,7 +113,7 @@ def test_a_stale_page_sends_no_decision(tmp_path: Path, monkeypatch: pytest.Monk
     monkeypatch.setenv("DEPOT_REVIEW_REFRESH_S", str(PERIOD_S))
     with (
         live_server(tmp_path) as url,
-        httpx.Client(base_url=url) as http,
+        live_client(url) as http,
         sync_playwright() as playwright,
     ):
         line = Line(http, build_line(http))  # type: ignore[arg-type]
