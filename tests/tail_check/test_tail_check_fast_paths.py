@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import math
 import sys
-import time
 
 import cv2
 import numpy as np
 import pytest
+from numpy.typing import NDArray
 
 import tail_check
 from tail_check import DEFAULT_PROFILE, decode_snapshot, detect, detect_snapshot
@@ -202,21 +202,23 @@ def test_the_reduced_decode_finds_the_same_smallest_disc(body: tuple[int, int, i
             assert fast.verdict == "present", radius
 
 
-def test_reduced_path_is_faster_than_full_decode_and_detect() -> None:
-    """Best of several interleaved calls (the machine may be shared): the reduced path costs
-    clearly less than the full decode + detect it replaces."""
-    cv2.setNumThreads(1)
-    data = [_jpeg(image) for image, _ in iter_snapshots(77, 4, size=(1920, 1080))]
-    fast, plain = [], []
-    for _ in range(5):
-        for d in data:
-            t0 = time.perf_counter()
-            detect_snapshot(d)
-            t1 = time.perf_counter()
-            detect(decode_snapshot(d))
-            fast.append(t1 - t0)
-            plain.append(time.perf_counter() - t1)
-    assert sorted(fast)[len(fast) // 4] < 0.9 * sorted(plain)[len(plain) // 4]
+def test_reduced_path_never_decodes_the_full_picture(monkeypatch: pytest.MonkeyPatch) -> None:
+    """What makes the reduced path cheap: a 1080p snapshot is decoded once, at half size
+    (the DCT-domain reduction), never at full size. The speed itself is a ratio measured
+    side by side in ``bench/tail_check.py``, not a timing here (the machine is shared)."""
+    decoded: list[tuple[int, ...]] = []
+    real = cv2.imdecode
+
+    def spy(buf: NDArray[np.uint8], flags: int) -> NDArray[np.uint8]:
+        image = np.asarray(real(buf, flags), dtype=np.uint8)
+        decoded.append(image.shape)
+        return image
+
+    monkeypatch.setattr(cv2, "imdecode", spy)
+    for image, _ in iter_snapshots(77, 2, size=(1920, 1080)):
+        decoded.clear()
+        detect_snapshot(_jpeg(image))
+        assert decoded == [(540, 960, 3)]
 
 
 def test_public_api_names_the_fast_path() -> None:
