@@ -6,6 +6,8 @@ updating (the red banner) sends no decision at all."""
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -50,12 +52,12 @@ def _login(page: Any, url: str) -> None:
     page.get_by_role("button", name="Log in").click()
 
 
-def test_a_clear_from_a_page_drawn_before_the_alarm_is_refused(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    from playwright.sync_api import expect, sync_playwright
+@contextmanager
+def _review_page(tmp_path: Path) -> Iterator[tuple[str, Line, int, Any]]:
+    """A live server with a run under review, and a Chromium page (not yet logged in):
+    (url, line, run id, page). Set ``DEPOT_REVIEW_REFRESH_S`` first."""
+    from playwright.sync_api import sync_playwright
 
-    monkeypatch.setenv("DEPOT_REVIEW_REFRESH_S", str(SLOW_PERIOD_S))
     with (
         live_server(tmp_path) as url,
         live_client(url) as http,
@@ -65,6 +67,19 @@ def test_a_clear_from_a_page_drawn_before_the_alarm_is_refused(
         run = review_run(line)
         browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
         page = browser.new_page(viewport={"width": 1366, "height": 900})
+        try:
+            yield url, line, run, page
+        finally:
+            browser.close()
+
+
+def test_a_clear_from_a_page_drawn_before_the_alarm_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from playwright.sync_api import expect
+
+    monkeypatch.setenv("DEPOT_REVIEW_REFRESH_S", str(SLOW_PERIOD_S))
+    with _review_page(tmp_path) as (url, line, run, page):
         dialogs: list[str] = []
 
         def answer(dialog: Any) -> None:
@@ -104,22 +119,13 @@ def test_a_clear_from_a_page_drawn_before_the_alarm_is_refused(
         expect(page.locator(".flash-ok")).to_contain_text("kept blocked by olena")
         assert line.section()["state"] == "blocked"
         assert [a["action"] for a in _audit(url)] == ["keep_blocked"]
-        browser.close()
 
 
 def test_a_stale_page_sends_no_decision(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from playwright.sync_api import expect, sync_playwright
+    from playwright.sync_api import expect
 
     monkeypatch.setenv("DEPOT_REVIEW_REFRESH_S", str(PERIOD_S))
-    with (
-        live_server(tmp_path) as url,
-        live_client(url) as http,
-        sync_playwright() as playwright,
-    ):
-        line = Line(http, build_line(http))  # type: ignore[arg-type]
-        run = review_run(line)
-        browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
-        page = browser.new_page(viewport={"width": 1366, "height": 900})
+    with _review_page(tmp_path) as (url, line, run, page):
         _login(page, url)
         page.goto(f"{url}/review?run={run}")
         page.fill("#reason", REASON)
@@ -135,4 +141,3 @@ def test_a_stale_page_sends_no_decision(tmp_path: Path, monkeypatch: pytest.Monk
         expect(page.locator("#decision-refusal")).to_contain_text("not current: nothing was sent")
         assert line.section()["state"] == "review"
         assert _audit(url) == []
-        browser.close()
