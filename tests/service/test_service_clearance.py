@@ -14,15 +14,22 @@ from tests.service.scenario import T0, Line, jpeg
 ARRIVE = T0 + timedelta(minutes=20)
 
 
-def complete_passage(
-    line: Line, *, arrival_cars: list[int], arrival_axles: int, disc: bool = True
-) -> dict:
+def departed(line: Line) -> int:
+    """Train 2041 leaves A with four cars, 16 axles and its tail disc: AB occupied. Returns
+    the run's id."""
     line.heartbeat_all(T0 - timedelta(seconds=20))
     line.read("A", [117, 118, 119, 120], T0 - timedelta(seconds=30))
     line.post("A-ac", "axle_count", T0 - timedelta(seconds=20), section="AB", axles=16)
     line.snapshot("A-cam", T0 - timedelta(seconds=10), jpeg(disc=True, seed=1))
     run = line.depart()
     assert line.section()["state"] == "occupied"
+    return run
+
+
+def complete_passage(
+    line: Line, *, arrival_cars: list[int], arrival_axles: int, disc: bool = True
+) -> dict:
+    run = departed(line)
     line.heartbeat_all(ARRIVE - timedelta(seconds=30))
     line.read("B", arrival_cars, ARRIVE - timedelta(seconds=40))
     line.post(

@@ -19,6 +19,7 @@ from service.replay import replay
 from tests.conftest import ADMIN
 from tests.service.faultkit import ERROR, Breaker, fault_runs
 from tests.service.scenario import T0, Line, iso, jpeg
+from tests.service.test_service_clearance import departed
 from tests.service.test_service_replay import snapshot_of_state
 from tests.service.test_service_review_screen import login
 
@@ -82,13 +83,7 @@ def test_a_failed_departure_on_a_free_section_is_for_a_person(
 
 def _occupied(line: Line) -> int:
     """Train 2041 leaves A with four cars, 16 axles and its tail disc: AB occupied."""
-    line.heartbeat_all(T0 - timedelta(seconds=20))
-    line.read("A", [117, 118, 119, 120], T0 - timedelta(seconds=30))
-    line.post("A-ac", "axle_count", T0 - timedelta(seconds=20), section="AB", axles=16)
-    line.snapshot("A-cam", T0 - timedelta(seconds=10), jpeg(disc=True, seed=1))
-    run = line.depart()
-    assert line.section()["state"] == "occupied"
-    return run
+    return departed(line)
 
 
 def _complete_arrival(line: Line) -> dict[str, Any]:
