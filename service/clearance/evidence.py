@@ -244,7 +244,7 @@ def liveness(
     stale |= set(
         owing_devices(session, section, run.from_station, moment(run, "departure"), contributed)
     )
-    kinds = EVIDENCE_DEVICE_KINDS
+    kinds: tuple[str, ...] = EVIDENCE_DEVICE_KINDS
     if run.eot_unit is not None:  # the receiver's silence matters only for EOT-equipped trains
         stale |= set(
             owing_devices(session, section, run.to_station, arrival, contributed, EOT_KINDS)
