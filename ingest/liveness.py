@@ -199,16 +199,23 @@ def silent_during(
     Exact, from the raw events' ``received_at`` (deterministic on replay: nothing received
     after ``end`` counts). :func:`silent_at` looks at one instant; a device silent for minutes
     that speaks again just before that instant is alive then, yet was not there while a train
-    passed it. A device never heard before ``start`` is stale from ``start`` (the gap's start
-    is then only known to be no later). Decommissioned devices are not expected to speak: from
+    passed it. The window starts no earlier than the device's registration; a device never
+    heard before ``start`` is stale from ``start`` (the gap's start is then only known to be
+    no later). Decommissioned devices are not expected to speak: from
     then on their silence means nothing.
     """
     if device.decommissioned_at is not None:
         end = min(end, device.decommissioned_at)
+    # Before it was registered a device served nothing: a reader installed minutes before a
+    # departure is silent only from its registration on.
+    registered = device.created_at
+    start = max(start, registered)
     if end <= start:
         return None
     limit = heartbeat_limit()
     before = last_received_before(session, device.id, start)
+    if before is None and start == registered:
+        before = registered
     heard = session.scalars(
         select(RawEvent.received_at)
         .where(

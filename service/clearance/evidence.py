@@ -16,7 +16,7 @@ from ingest.liveness import silent_at
 from ingest.models import Snapshot
 from service.clearance.certainty import judge
 from service.clearance.models import AxleReading, CarPassage, EotReport, Run
-from service.clearance.passage import passage_silences, passage_window
+from service.clearance.passage import departure_window, passage_silences, passage_window
 from service.clearance.readers import disagreement_reason, reader_disagreements
 from service.clearance.rules import (
     ConsistEvidence,
@@ -250,8 +250,16 @@ def liveness(
             owing_devices(session, section, run.to_station, arrival, contributed, EOT_KINDS)
         )
         kinds = (*kinds, *EOT_KINDS)
-    window = passage_window(moment(run, "departure"), arrival)
-    silences = passage_silences(session, section, run, window, contributed | stale, kinds)
+    departure, known = moment(run, "departure"), contributed | stale
+    silences = [
+        *passage_silences(
+            session, section, run.from_station, departure_window(departure), known,
+            EVIDENCE_DEVICE_KINDS,
+        ),
+        *passage_silences(
+            session, section, run.to_station, passage_window(departure, arrival), known, kinds
+        ),
+    ]  # fmt: skip
     quiet = contributed | stale | {s.device for s in silences}
     unheard = [
         (run.to_station, device.id)

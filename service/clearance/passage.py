@@ -21,7 +21,6 @@ from sqlalchemy.orm import Session
 
 from core.models import Section
 from ingest.liveness import silent_during
-from service.clearance.models import Run
 from service.clearance.rules import PassageSilence
 from service.setup.service import section_devices
 
@@ -52,22 +51,32 @@ def passage_window(
     return max(departure, arrival - times.believed_lateness), arrival
 
 
+def departure_window(
+    departure: datetime, times: PassageTimes = PASSAGE
+) -> tuple[datetime, datetime]:
+    """The server times over which the departure end's devices must have been alive: the
+    train drew up to them and passed them before the departure was reported, up to
+    ``believed_lateness`` before it."""
+    return departure - times.believed_lateness, departure
+
+
 def passage_silences(
     session: Session,
     section: Section,
-    run: Run,
+    station: str,
     window: tuple[datetime, datetime],
     known: set[str],
     kinds: tuple[str, ...],
 ) -> list[PassageSilence]:
-    """The arrival end's devices of ``kinds`` that owe evidence and were silent past their
-    heartbeat deadline at some point of the passage window, with the gap, in id order.
+    """``station``'s devices of ``kinds`` serving ``section`` that owe evidence and were
+    silent past their heartbeat deadline at some point of ``window``, with the gap, in id
+    order.
 
     ``known``: the devices left out — those that reported for the run (they count with what
-    they reported, ``evidence.owing_devices``) and those already stale at the arrival's moment
+    they reported, ``evidence.owing_devices``) and those already stale at the side's moment
     (a doubt of their own)."""
     found = []
-    for device in section_devices(session, section, run.to_station):
+    for device in section_devices(session, section, station):
         if device.kind not in kinds or device.id in known:
             continue
         gap = silent_during(session, device, *window)

@@ -7,8 +7,10 @@ Nothing here touches the database: the service gathers a :class:`RunEvidence` an
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from datetime import UTC, datetime
+from datetime import datetime
 from typing import Literal
+
+from core.schemas import format_instant
 
 Verdict = Literal["complete", "incomplete", "undetermined"]
 
@@ -226,7 +228,7 @@ def _doubts(evidence: RunEvidence) -> list[str]:
             f"device {device} is silent past its heartbeat deadline; its evidence is missing"
         )
     doubts.extend(
-        f"device {s.device} was silent from {_clock(s.start, s.end)} to {_clock(s.end, s.start)}"
+        f"device {s.device} was silent from {format_instant(s.start)} to {format_instant(s.end)}"
         " while the train passed; its evidence is missing; a person must look"
         for s in evidence.passage_silences
     )
@@ -242,15 +244,6 @@ def _doubts(evidence: RunEvidence) -> list[str]:
             f" at arrival ({EOT.whole_psig} psig or more proves the train whole)"
         )
     return doubts
-
-
-def _clock(at: datetime, other: datetime) -> str:
-    """A time of day (UTC) in a reason; the whole instant when the other end of the span falls
-    on another day."""
-    at, other = at.astimezone(UTC), other.astimezone(UTC)
-    if at.date() == other.date():
-        return at.strftime("%H:%M:%S")
-    return at.strftime("%Y-%m-%d %H:%M:%S")
 
 
 def _notes(evidence: RunEvidence) -> list[str]:

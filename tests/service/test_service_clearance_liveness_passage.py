@@ -29,10 +29,14 @@ from tests.service.scenario import ARRIVAL_END, T0, Line, jpeg
 ARRIVE = T0 + timedelta(minutes=20)
 SECOND, MINUTE = timedelta(seconds=1), timedelta(minutes=1)
 CARS = [117, 118, 119, 120]  # 4 axles each
+DEPARTURE_END = ("A-ac", "A-cam", "A-ir", "A-wm")
 
 
 @pytest.fixture
 def clocked(client: TestClient, server_clock: ServerClock) -> Line:  # noqa: F811
+    """The line, its devices registered an hour before the first train (a device's silence
+    counts only from its registration)."""
+    server_clock.set(T0 - timedelta(hours=1))
     return Line(client, build_line(client), clock=server_clock)
 
 
@@ -44,7 +48,8 @@ def passage(line: Line, *, wm_silent_from: datetime | None, departed: datetime =
     """2041 leaves A (4 cars read, 16 axles) and reaches B complete: the same cars read, 16
     axles, the tail disc seen. B's devices send heartbeats from 11 min before the arrival;
     the wheel-mark reader B-wm (which reads nothing of this train) stops at ``wm_silent_from``
-    and is heard again 30 s before the arrival."""
+    and is heard again 30 s before the arrival. A's devices are heard while the train leaves."""
+    line.keep_alive(departed - 11 * MINUTE, departed - 20 * SECOND, DEPARTURE_END)
     line.heartbeat_all(departed - 20 * SECOND)
     line.read("A", CARS, departed - 30 * SECOND)
     run = line.depart(departed)
@@ -71,8 +76,8 @@ def test_f4_a_reader_silent_while_the_train_passed_is_a_doubt(clocked: Line) -> 
     # Its last heartbeat before the gap: 11 min before, then every 45 s up to 9 min before.
     named = [r for r in decision["reasons"] if "B-wm" in r]
     assert named == [
-        "device B-wm was silent from 10:10:30 to 10:19:30 while the train passed; its"
-        " evidence is missing; a person must look"
+        "device B-wm was silent from 2026-11-23T10:10:30Z to 2026-11-23T10:19:30Z while the"
+        " train passed; its evidence is missing; a person must look"
     ], decision["reasons"]
     assert shown["evidence"]["silent_while_passing"] == [
         {"device": "B-wm", "from": "2026-11-23T10:10:30Z", "to": "2026-11-23T10:19:30Z"}
@@ -173,3 +178,31 @@ def test_g2_a_live_reader_that_reported_nothing_is_named(line: Line) -> None:
         in decision["reasons"]
     ), decision["reasons"]
     assert not any("B-ir" in r or "B-ac" in r for r in decision["reasons"]), decision["reasons"]
+
+
+def test_f4_a_departure_reader_silent_while_the_train_left_is_a_doubt(clocked: Line) -> None:
+    """The same hole at the other end (found in review): A's wheel-mark reader, silent for
+    nine minutes while the train drew up and left, heard again 30 s before the departure,
+    was alive at the departure's moment, and its missing consist was no doubt."""
+    at = T0 - 11 * MINUTE
+    while at <= T0 - 20 * SECOND:
+        clocked.keep_alive(
+            at, at, tuple(d for d in DEPARTURE_END if d != "A-wm" or at <= T0 - 10 * MINUTE)
+        )
+        at += 45 * SECOND
+    clocked.post("A-wm", "heartbeat", T0 - 30 * SECOND)
+    clocked.read("A", CARS, T0 - 30 * SECOND)
+    run = clocked.depart(T0)
+    count(clocked, "A-ac", 16, T0 + 15 * SECOND)
+    clocked.keep_alive(ARRIVE - 11 * MINUTE, ARRIVE - 20 * SECOND)
+    clocked.read("B", CARS, ARRIVE - 40 * SECOND)
+    count(clocked, "B-ac", 16, ARRIVE - 20 * SECOND)
+    clocked.snapshot("B-cam", ARRIVE - 5 * SECOND, jpeg(disc=True))
+    clocked.arrive(ARRIVE)
+    decision = run_of(clocked, run)["decision"]
+    assert decision["verdict"] == "undetermined", decision
+    assert clocked.section()["state"] == "review"
+    assert any(
+        r.startswith("device A-wm was silent from") and "while the train passed" in r
+        for r in decision["reasons"]
+    ), decision["reasons"]
