@@ -1,4 +1,4 @@
-"""Whether the arrival end's devices were alive while the train passed them (clearance.md,
+"""Whether each end's devices were alive while the train passed them (clearance.md,
 "Device health" and rule 3).
 
 Staleness judged at one instant — when the server received the arrival — misses a device
@@ -9,7 +9,9 @@ owes evidence is judged over the **passage window**: from the departure up to th
 moment, but reaching back no further than :attr:`PassageTimes.believed_lateness` before the
 arrival (a train that left days ago must not make every short outage since count). A device
 silent past its heartbeat deadline at any point of that window is a doubt, with the gap in
-the reason. Everything is read from the raw events' receive times: replay decides the same.
+the reason. The departure end's devices are judged the same way over the
+``believed_lateness`` before the departure, while the train drew up to them and left.
+Everything is read from the raw events' receive times: replay decides the same.
 """
 
 from __future__ import annotations
