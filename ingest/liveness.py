@@ -189,53 +189,6 @@ def silent_at(session: Session, device: Device, at: datetime) -> bool:
     return silent(last_received_before(session, device.id, at), at)
 
 
-def silent_during(
-    session: Session, device: Device, start: datetime, end: datetime
-) -> tuple[datetime, datetime] | None:
-    """The first silence of ``device`` longer than the heartbeat limit that makes it stale at
-    some server time in ``[start, end]``, as (last heard before it, next heard after it or
-    ``end``); ``None`` when it was alive throughout.
-
-    Exact, from the raw events' ``received_at`` (deterministic on replay: nothing received
-    after ``end`` counts). :func:`silent_at` looks at one instant; a device silent for minutes
-    that speaks again just before that instant is alive then, yet was not there while a train
-    passed it. The window starts no earlier than the device's registration; a device never
-    heard before ``start`` is stale from ``start`` (the gap's start is then only known to be
-    no later). Decommissioned devices are not expected to speak: from
-    then on their silence means nothing.
-    """
-    if device.decommissioned_at is not None:
-        end = min(end, device.decommissioned_at)
-    # Before it was registered a device served nothing: a reader installed minutes before a
-    # departure is silent only from its registration on.
-    registered = device.created_at
-    start = max(start, registered)
-    if end <= start:
-        return None
-    limit = heartbeat_limit()
-    before = last_received_before(session, device.id, start)
-    if before is None and start == registered:
-        before = registered
-    heard = session.scalars(
-        select(RawEvent.received_at)
-        .where(
-            RawEvent.device_id == device.id,
-            RawEvent.received_at > start,
-            RawEvent.received_at <= end,
-        )
-        .order_by(RawEvent.received_at)
-    )
-    previous = before
-    # The window's end stands as the last point: silent up to it counts as much as a gap.
-    for then in (*heard, end):
-        if previous is None:
-            return start, then  # never heard: stale from the start (:func:`silent`)
-        if then - previous > limit:
-            return previous, then
-        previous = then
-    return None
-
-
 def stale_devices(session: Session, now: datetime) -> list[Device]:
     """Every device stale at server time ``now`` (by :func:`is_stale`), in id order: the list a
     screen shows (it may leave out kinds that do not serve a section)."""

@@ -16,16 +16,13 @@ from ingest.liveness import silent_at
 from ingest.models import Snapshot
 from service.clearance.certainty import judge
 from service.clearance.models import AxleReading, CarPassage, EotReport, Run
-from service.clearance.passage import departure_window, passage_silences, passage_window
 from service.clearance.readers import disagreement_reason, reader_disagreements
 from service.clearance.rules import (
     ConsistEvidence,
     EotEvidence,
     EotReading,
-    PassageSilence,
     RunEvidence,
     TailEvidence,
-    ZeroCount,
     eot_stands_in,
 )
 from service.setup.service import section_devices
@@ -33,9 +30,6 @@ from tail_check.profile import CameraProfile
 
 EVIDENCE_DEVICE_KINDS = ("camera", "wheel_mark_reader", "ir_reader", "axle_counter")
 EOT_KINDS = ("eot_receiver",)
-# The arrival end's devices that count or identify the train: one alive that reported nothing,
-# while others did, is named in a note (a camera's missing photo is a doubt of its own).
-COUNTING_KINDS = ("wheel_mark_reader", "ir_reader", "axle_counter")
 DEFAULT_ABSENT_CONFIDENCE = CameraProfile().absent_confidence
 # An EOT report counts for the run between departure and this long after arrival (clearance.md).
 EOT_AFTER_ARRIVAL = timedelta(seconds=60)
@@ -225,61 +219,6 @@ def _eot_summary(evidence: RunEvidence, rows: list[EotReport]) -> dict[str, Any]
 
 
 @dataclass(frozen=True)
-class Liveness:
-    """The devices whose missing evidence the decision must mention: stale at a side's
-    moment, silent while the train passed the arrival end, or alive but unheard."""
-
-    stale: set[str]
-    silences: list[PassageSilence]
-    unheard: list[tuple[str, str]]
-
-
-def liveness(
-    session: Session, run: Run, section: Section, contributed: set[str], arrived: bool
-) -> Liveness:
-    """``arrived``: some device at the arrival end reported for the run (only then is a live
-    device's silence about this train worth a note)."""
-    arrival = moment(run, "arrival")
-    stale = set(owing_devices(session, section, run.to_station, arrival, contributed))
-    stale |= set(
-        owing_devices(session, section, run.from_station, moment(run, "departure"), contributed)
-    )
-    kinds: tuple[str, ...] = EVIDENCE_DEVICE_KINDS
-    if run.eot_unit is not None:  # the receiver's silence matters only for EOT-equipped trains
-        stale |= set(
-            owing_devices(session, section, run.to_station, arrival, contributed, EOT_KINDS)
-        )
-        kinds = (*kinds, *EOT_KINDS)
-    departure, known = moment(run, "departure"), contributed | stale
-    silences = [
-        *passage_silences(
-            session, section, run.from_station, departure_window(departure), known,
-            EVIDENCE_DEVICE_KINDS,
-        ),
-        *passage_silences(
-            session, section, run.to_station, passage_window(departure, arrival), known, kinds
-        ),
-    ]  # fmt: skip
-    quiet = contributed | stale | {s.device for s in silences}
-    unheard = [
-        (run.to_station, device.id)
-        for device in section_devices(session, section, run.to_station)
-        if arrived
-        and device.kind in COUNTING_KINDS
-        and device.id not in quiet
-        and (device.decommissioned_at is None or device.decommissioned_at > arrival)
-    ]
-    return Liveness(stale, silences, unheard)
-
-
-def zero_counts(run: Run, readings: list[AxleReading]) -> list[ZeroCount]:
-    """The counters that reported 0 axles for the train, each once: no count (rules)."""
-    station = {"departure": run.from_station, "arrival": run.to_station}
-    found = {(r.device_id, station.get(r.side or "", "?")) for r in readings if r.axles == 0}
-    return [ZeroCount(device, at) for device, at in sorted(found)]
-
-
-@dataclass(frozen=True)
 class Gathered:
     evidence: RunEvidence
     summary: dict[str, Any]
@@ -309,14 +248,15 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         | {r.device_id for r in readings}
         | {e.device_id for e in eot_rows}
     )
-    arrived = any(
-        item.side == "arrival" for group in (snapshots, passages, readings, eot_rows)
-        for item in group
-    )  # fmt: skip
-    alive = liveness(session, run, section, contributed, arrived)
-    stale = alive.stale
-    zeros = zero_counts(run, readings)
-    readings = [r for r in readings if r.axles > 0]  # a count of 0 is no count (its doubt)
+    arrival = moment(run, "arrival")
+    stale = set(owing_devices(session, section, run.to_station, arrival, contributed))
+    stale |= set(
+        owing_devices(session, section, run.from_station, moment(run, "departure"), contributed)
+    )
+    if run.eot_unit is not None:  # the receiver's silence matters only for EOT-equipped trains
+        stale |= set(
+            owing_devices(session, section, run.to_station, arrival, contributed, EOT_KINDS)
+        )
     families = consists(passages)
     consist, shown = compare_families(families)
     best = families.get("wheel") or families.get("ir") or {}
@@ -329,9 +269,6 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         stale_devices=tuple(sorted(stale)),
         eot=eot,
         contradictions=(*judged.doubts, *contradictions(snapshots, readings)),
-        passage_silences=tuple(alive.silences),
-        zero_counts=tuple(zeros),
-        unheard=tuple(alive.unheard),
     )
     summary = {
         "tail": {
@@ -354,12 +291,6 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         "consist_comparison": shown,
         "axles": {"departure": evidence.departure_axles, "arrival": evidence.arrival_axles},
         "stale_devices": sorted(stale),
-        "silent_while_passing": [
-            {"device": s.device, "from": format_instant(s.start), "to": format_instant(s.end)}
-            for s in alive.silences
-        ],
-        "unheard_devices": [device for _, device in alive.unheard],
-        "zero_axle_counts": [z.device for z in zeros],
         "snapshot_ids": sorted(s.id for s in attached),
         "uncertain_evidence": sorted(judged.unproven),
         "eot": _eot_summary(evidence, eot_rows),

@@ -7,10 +7,7 @@ Nothing here touches the database: the service gathers a :class:`RunEvidence` an
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from datetime import datetime
 from typing import Literal
-
-from core.schemas import format_instant
 
 Verdict = Literal["complete", "incomplete", "undetermined"]
 
@@ -81,26 +78,6 @@ class EotEvidence:
 
 
 @dataclass(frozen=True)
-class PassageSilence:
-    """A device at the arrival end, owing evidence, that was silent past its heartbeat
-    deadline while the train passed it (``passage``): heard at ``start``, next at ``end`` (or
-    the window's end). Its evidence is missing, and not because nothing happened: a doubt."""
-
-    device: str
-    start: datetime
-    end: datetime
-
-
-@dataclass(frozen=True)
-class ZeroCount:
-    """An axle counter that reported 0 axles for a train: a broken or unpowered counter, no
-    count at all (never agreement with another 0, never proof of loss by itself)."""
-
-    device: str
-    station: str
-
-
-@dataclass(frozen=True)
 class RunEvidence:
     arrival_tail: TailEvidence | None = None
     departure_tail: TailEvidence | None = None
@@ -111,12 +88,6 @@ class RunEvidence:
     eot: EotEvidence | None = None
     # Reports of one side that disagree with each other (in words); never ``complete``.
     contradictions: tuple[str, ...] = field(default_factory=tuple)
-    passage_silences: tuple[PassageSilence, ...] = field(default_factory=tuple)
-    zero_counts: tuple[ZeroCount, ...] = field(default_factory=tuple)
-    # Live devices at the arrival end that reported nothing for the train, while others did
-    # ("station: device"). Missing evidence of a live device contradicts nothing (the item is
-    # missing), so the verdict stands; the dispatcher is told that it is missing.
-    unheard: tuple[tuple[str, str], ...] = field(default_factory=tuple)
 
 
 def _eot_last(evidence: RunEvidence) -> EotReading | None:
@@ -227,16 +198,6 @@ def _doubts(evidence: RunEvidence) -> list[str]:
         doubts.append(
             f"device {device} is silent past its heartbeat deadline; its evidence is missing"
         )
-    doubts.extend(
-        f"device {s.device} was silent from {format_instant(s.start)} to {format_instant(s.end)}"
-        " while the train passed; its evidence is missing; a person must look"
-        for s in evidence.passage_silences
-    )
-    doubts.extend(
-        f"the axle counter {z.device} at {z.station} reported 0 axles for a train: that is no"
-        " count (a broken or unpowered counter?); a person must look"
-        for z in evidence.zero_counts
-    )
     last = _eot_last(evidence)
     if last is not None and EOT.vented_psig <= last.pressure_psig < EOT.whole_psig:
         doubts.append(
@@ -244,16 +205,6 @@ def _doubts(evidence: RunEvidence) -> list[str]:
             f" at arrival ({EOT.whole_psig} psig or more proves the train whole)"
         )
     return doubts
-
-
-def _notes(evidence: RunEvidence) -> list[str]:
-    """What the dispatcher should know whatever the verdict: evidence missing from a device
-    that was alive (not a doubt by the rules, but a reader that says nothing may be broken)."""
-    return [
-        f"device {device} at {station} is alive but reported nothing for this train:"
-        " its evidence is missing"
-        for station, device in evidence.unheard
-    ]
 
 
 def _agreements(evidence: RunEvidence) -> list[str]:
@@ -282,16 +233,14 @@ def decide(evidence: RunEvidence) -> Decision:
     tail disc is present (or the train's own EOT unit reports ≥ 45 psig at arrival, standing in
     for it) and every item present agrees; otherwise undetermined. Reports of other EOT units
     are ignored, with a reason. A weak ``absent`` tail stays a doubt even with the EOT at
-    pressure: an item that is present and does not agree. A device silent while the train
-    passed, or an axle count of 0, is a doubt; a live device that reported nothing is a note
-    (last, whatever the verdict).
+    pressure: an item that is present and does not agree.
 
     Parameters
     ----------
     evidence : RunEvidence
         What the run has, each item ``None`` when missing (stale devices' evidence is left out).
     """
-    ignored = (*_eot_ignored(evidence), *_notes(evidence))
+    ignored = _eot_ignored(evidence)
     losses = _losses(evidence)
     if losses:
         return Decision("incomplete", (*losses, *ignored))

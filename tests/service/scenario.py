@@ -14,8 +14,6 @@ from tests.conftest import ADMIN
 from tests.service.clock import ServerClock
 
 T0 = datetime(2026, 11, 23, 10, 0, tzinfo=UTC)
-# The devices at the arrival end of AB (station B), which must be alive while a train passes.
-ARRIVAL_END = ("B-ac", "B-cam", "B-eot", "B-ir", "B-wm")
 
 
 def iso(at: datetime) -> str:
@@ -63,21 +61,6 @@ class Line:
         for device in self.keys:
             if device not in except_:
                 self.post(device, "heartbeat", at)
-
-    def keep_alive(
-        self,
-        start: datetime,
-        end: datetime,
-        devices: tuple[str, ...] = ARRIVAL_END,
-        every: timedelta = timedelta(seconds=45),
-    ) -> None:
-        """Heartbeats of ``devices`` from ``start`` up to ``end``, within the heartbeat period
-        (60 s): with a server clock, they stayed alive all the while the train passed."""
-        at = start
-        while at <= end:
-            for device in devices:
-                self.post(device, "heartbeat", at)
-            at += every
 
     def snapshot(
         self, device: str, at: datetime, data: bytes, received: datetime | None = None

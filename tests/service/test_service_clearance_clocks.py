@@ -36,13 +36,6 @@ def line(client: TestClient, server_clock: ServerClock) -> Line:  # noqa: F811
     return Line(client, build_line(client), clock=server_clock)
 
 
-def ran_in(line: Line, arrival: datetime) -> None:
-    """Every device heard of 30 s before ``arrival``, and the arrival end's all the while the
-    train ran in: a device silent then is a doubt (``service.clearance.passage``)."""
-    line.keep_alive(arrival - timedelta(minutes=11), arrival - 45 * SECOND)
-    line.heartbeat_all(arrival - 30 * SECOND)
-
-
 def count(line: Line, device: str, axles: int, at: datetime, received: datetime) -> dict[str, Any]:
     return line.post(device, "axle_count", at, received=received, section="AB", axles=axles)
 
@@ -56,7 +49,7 @@ def short_train(line: Line, *, behind: timedelta, counted_late: bool = False) ->
     passed = T0 + 15 * SECOND
     if not counted_late:
         assert count(line, "A-ac", 16, passed - behind, received=passed)["run"] is None
-    ran_in(line, ARRIVE)
+    line.heartbeat_all(ARRIVE - 30 * SECOND)
     count(line, "B-ac", 12, ARRIVE - 20 * SECOND, received=ARRIVE - 20 * SECOND)
     line.snapshot("B-cam", ARRIVE - 5 * SECOND, jpeg(disc=True, seed=21))
     result = line.arrive(ARRIVE)
@@ -105,7 +98,7 @@ def test_d2_a_counter_inside_the_window_still_proves_the_loss(line: Line) -> Non
     run = line.depart(T0)
     passed = T0 + 15 * SECOND
     assert count(line, "A-ac", 16, passed - 70 * SECOND, received=passed)["run"] == run
-    ran_in(line, ARRIVE)
+    line.heartbeat_all(ARRIVE - 30 * SECOND)
     count(line, "B-ac", 12, ARRIVE - 20 * SECOND, received=ARRIVE - 20 * SECOND)
     result = line.arrive(ARRIVE)
     assert result["verdict"] == "incomplete", result
@@ -125,7 +118,7 @@ def _quick_follower(
     departs ``gap`` later, loses its tail on the way (no photo of its own)."""
     line.heartbeat_all(T0 - 20 * SECOND)
     r1 = line.depart(T0)
-    ran_in(line, ARRIVE)
+    line.heartbeat_all(ARRIVE - 30 * SECOND)
     taken = ARRIVE - 5 * SECOND
     photo_first = photo_received < ARRIVE
     if photo_first:
@@ -138,7 +131,7 @@ def _quick_follower(
     if not photo_first:
         line.snapshot("B-cam", taken + ahead, jpeg(disc=True, seed=21), received=photo_received)
     second = ARRIVE + timedelta(minutes=21)
-    ran_in(line, second)
+    line.heartbeat_all(second - 30 * SECOND)
     return r1, r2, line.arrive(second, train="2043")
 
 
@@ -181,7 +174,7 @@ def test_d7_an_arrival_interlocking_clock_ahead_is_no_conflict(
     ahead = timedelta(seconds=290)
     line.heartbeat_all(T0 - 20 * SECOND)
     line.depart(T0)
-    ran_in(line, ARRIVE)
+    line.heartbeat_all(ARRIVE - 30 * SECOND)
     line.read("A", [117, 118, 119, 120], T0 - 30 * SECOND)
     line.read("B", [117, 118, 119, 120], ARRIVE - 40 * SECOND)
     line.snapshot("B-cam", ARRIVE - 5 * SECOND, jpeg(disc=True, seed=21))
@@ -205,7 +198,7 @@ def test_arrival_count_dated_before_the_departure_does_not_free(line: Line) -> N
     line.heartbeat_all(T0 - 20 * SECOND)
     line.depart(T0)
     count(line, "A-ac", 16, T0 + 15 * SECOND, received=T0 + 15 * SECOND)
-    ran_in(line, ARRIVE)
+    line.heartbeat_all(ARRIVE - 30 * SECOND)
     counted = ARRIVE - 20 * SECOND
     assert count(line, "B-ac", 12, counted - behind, received=counted)["run"] is None
     line.snapshot("B-cam", ARRIVE - 5 * SECOND, jpeg(disc=True, seed=21))

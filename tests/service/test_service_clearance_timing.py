@@ -19,7 +19,7 @@ from ingest.liveness import stale_devices
 from tests.conftest import ADMIN
 from tests.service.clock import ServerClock, server_clock  # noqa: F401 (fixture)
 from tests.service.linekit import build_line
-from tests.service.scenario import ARRIVAL_END, T0, Line, jpeg
+from tests.service.scenario import T0, Line, jpeg
 
 ARRIVE = T0 + timedelta(minutes=20)
 LATE = ARRIVE + timedelta(minutes=10)
@@ -38,16 +38,8 @@ def depart_with(line: Line, *, quiet: tuple[str, ...] = ()) -> int:
     return line.depart()
 
 
-def keep_alive(line: Line, devices: tuple[str, ...]) -> None:
-    """The arrival end's ``devices`` alive while the train ran in (the passage window): a
-    device silent then is a doubt (``service.clearance.passage``), whatever it says later."""
-    line.keep_alive(ARRIVE - timedelta(minutes=11), ARRIVE - timedelta(seconds=45), devices)
-
-
 def arrive_with(line: Line, *, quiet: tuple[str, ...] = ()) -> dict:
-    """Every device but ``quiet`` heard of 30 s before arrival (and the arrival end's all the
-    while the train ran in); the tail disc seen; arrival."""
-    keep_alive(line, tuple(d for d in ARRIVAL_END if d not in quiet))
+    """Every device but ``quiet`` heard of 30 s before arrival; the tail disc seen; arrival."""
     line.heartbeat_all(ARRIVE - timedelta(seconds=30), except_=quiet)
     line.snapshot("B-cam", ARRIVE - timedelta(seconds=5), jpeg(disc=True, seed=21))
     return line.arrive(ARRIVE)
@@ -103,7 +95,6 @@ def _late_arrival_count(line: Line) -> None:
 
 def _clock_behind(line: Line) -> None:
     _departure_only(line)
-    keep_alive(line, ("B-ir",))
     # B-ir's clock is 3 h behind, but the server heard from it 30 s before arrival.
     line.post(
         "B-ir", "heartbeat", ARRIVE - timedelta(hours=3), received=ARRIVE - timedelta(seconds=30)
