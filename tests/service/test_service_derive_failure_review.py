@@ -81,11 +81,6 @@ def test_a_failed_departure_on_a_free_section_is_for_a_person(
     assert raw is not None and raw.derive_error == answer["derive_error"]
 
 
-def _occupied(line: Line) -> int:
-    """Train 2041 leaves A with four cars, 16 axles and its tail disc: AB occupied."""
-    return departed(line)
-
-
 def _complete_arrival(line: Line) -> dict[str, Any]:
     line.heartbeat_all(ARRIVE - timedelta(seconds=30))
     line.read("B", [117, 118, 119, 120], ARRIVE - timedelta(seconds=40))
@@ -98,7 +93,7 @@ def _complete_arrival(line: Line) -> dict[str, Any]:
 def test_a_fault_on_an_occupied_section_outlasts_a_complete_arrival(
     line: Line, breaker: Breaker, dispatcher: dict[str, str], kind: str
 ) -> None:
-    train = _occupied(line)
+    train = departed(line)
     breaker.kinds(kind)
     at = T0 + timedelta(minutes=5)
     if kind == "axle_count":
@@ -127,7 +122,7 @@ def test_a_fault_on_an_occupied_section_outlasts_a_complete_arrival(
 def test_a_waiting_fault_cannot_be_decided_before_the_run_ahead(
     line: Line, breaker: Breaker, client: TestClient, session: Session, dispatcher: dict[str, str]
 ) -> None:
-    _occupied(line)
+    departed(line)
     breaker.kinds("axle_count")
     breaker.ids.add(_next_id(line, "B-ac"))
     fault = line.post("B-ac", "axle_count", T0 + timedelta(minutes=5), section="AB", axles=16)
@@ -212,7 +207,7 @@ def test_a_failing_failure_handler_still_acks_and_keeps_the_raw_event(
 def test_late_proof_of_loss_outranks_the_fault_on_the_queue(
     line: Line, breaker: Breaker, client: TestClient, session: Session
 ) -> None:
-    train = _occupied(line)
+    train = departed(line)
     breaker.kinds("eot_status")
     breaker.ids.add(_next_id(line, "B-eot"))
     line.post("B-eot", "eot_status", T0 + timedelta(minutes=5), section="AB", unit_address=7,
@@ -234,7 +229,7 @@ def test_late_proof_of_loss_outranks_the_fault_on_the_queue(
 def test_a_failed_arrival_keeps_the_train_in_the_section_and_the_fault_behind_it(
     line: Line, breaker: Breaker, dispatcher: dict[str, str]
 ) -> None:
-    train = _occupied(line)
+    train = departed(line)
     breaker.kinds("train_arrived")
     breaker.ids.add(_next_id(line, "B-ilk"))
     fault = line.arrive(ARRIVE)["fault_run"]
