@@ -23,7 +23,7 @@ from sqlalchemy.orm import Session
 
 from core.errors import DepotError
 from core.models import Device
-from ingest.liveness import restore_pending, seen, snapshot_pending
+from ingest.liveness import heard_up_to, restore_pending, seen, snapshot_pending
 from ingest.models import RawEvent, StoredRaw
 from ingest.schemas import ALL_EVENT_MODELS, EventBase, kind_of, section_of
 
@@ -167,8 +167,10 @@ def has_handlers(kind: str) -> bool:
 def derive(derivation: Derivation) -> dict[str, Any]:
     """Run every handler of the event's kind; merge what they report for the client."""
     result: dict[str, Any] = {}
-    for handler in HANDLERS.get(derivation.raw.kind, ()):
-        result.update(handler(derivation) or {})
+    # A decision reads liveness from the events stored before this one, live and on replay.
+    with heard_up_to(derivation.session, derivation.raw.id):
+        for handler in HANDLERS.get(derivation.raw.kind, ()):
+            result.update(handler(derivation) or {})
     # Liveness counts from when the server received the event, not the device's clock; it has
     # a granularity step: a device sending many events a second need not rewrite its row for
     # each one (decisions read staleness from the raw events' receive times). After the

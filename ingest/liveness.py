@@ -23,9 +23,10 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from datetime import datetime, timedelta
 
-from sqlalchemy import Table, bindparam, event, func, or_, select, update
+from sqlalchemy import ColumnElement, Table, bindparam, event, func, or_, select, update
 from sqlalchemy.orm import Session
 
 from core.models import Device
@@ -172,14 +173,96 @@ def is_stale(device: Device, now: datetime) -> bool | None:
     return silent(device.last_seen_at, now)
 
 
+# The id of the raw event being derived: a decision reads liveness only from the raw events
+# stored up to it (:func:`heard_up_to`).
+_HEARD_UPTO = "depot_heard_upto"
+
+
+@contextmanager
+def heard_up_to(session: Session, raw_id: int | None) -> Iterator[None]:
+    """Within the block, liveness is read from the raw events stored up to ``raw_id``.
+
+    A receive time can be earlier than the moment its row is stored: JetStream gives the
+    broker's time, and a bridge's backlog is delivered after a restart. Read from every row, a
+    decision taken live (before such a row was stored) and the same decision on replay (which
+    finds it stored) would differ. Bounded by the derived event's own id, both read the rows
+    stored before it: the same ones (but for a row whose transaction had not yet committed).
+    """
+    before = session.info.get(_HEARD_UPTO)
+    session.info[_HEARD_UPTO] = raw_id
+    try:
+        yield
+    finally:
+        session.info[_HEARD_UPTO] = before
+
+
+def _stored_so_far(session: Session) -> list[ColumnElement[bool]]:
+    bound: int | None = session.info.get(_HEARD_UPTO)
+    return [] if bound is None else [RawEvent.id <= bound]
+
+
 def last_received_before(session: Session, device_id: str, at: datetime) -> datetime | None:
     """When the server last received anything from the device up to server time ``at``
     (exact, from the raw events: deterministic on replay)."""
     return session.scalar(
         select(func.max(RawEvent.received_at)).where(
-            RawEvent.device_id == device_id, RawEvent.received_at <= at
+            RawEvent.device_id == device_id, RawEvent.received_at <= at, *_stored_so_far(session)
         )
     )
+
+
+@dataclass(frozen=True)
+class Silence:
+    """A time the server heard nothing from a device for longer than the heartbeat period.
+
+    ``heard`` is when it last heard from it before (an event received, or the device's
+    registration); ``until`` the next event received, or the end of the window asked about
+    (then ``ongoing``).
+    """
+
+    device: str
+    heard: datetime
+    until: datetime
+    ongoing: bool
+
+
+def silent_during(
+    session: Session, device: Device, start: datetime, end: datetime
+) -> Silence | None:
+    """The first silence of ``device`` longer than the heartbeat period at any time between
+    server times ``start`` and ``end``, or None when it was heard throughout.
+
+    The window is cut to the time the device was in service: it owes nothing before it was
+    registered, nor once decommissioned. Its registration starts its first silence, and a
+    device never heard from by the window's end is silent whatever the window's length: it
+    has never shown that it works.
+    """
+    start = max(start, device.created_at)
+    if device.decommissioned_at is not None:
+        end = min(end, device.decommissioned_at)
+    if end <= start:
+        return None
+    limit = heartbeat_limit()
+    since = last_received_before(session, device.id, start)
+    heard = device.created_at if since is None else max(since, device.created_at)
+    received = session.scalars(
+        select(RawEvent.received_at)
+        .where(
+            RawEvent.device_id == device.id,
+            RawEvent.received_at > start,
+            RawEvent.received_at <= end,
+            *_stored_so_far(session),
+        )
+        .order_by(RawEvent.received_at)
+    )
+    ever_heard = since is not None
+    for at in received:
+        if at - heard > limit:
+            return Silence(device.id, heard, at, ongoing=False)
+        heard, ever_heard = at, True
+    if end - heard > limit or not ever_heard:
+        return Silence(device.id, heard, end, ongoing=True)
+    return None
 
 
 def silent_at(session: Session, device: Device, at: datetime) -> bool:

@@ -12,6 +12,7 @@ from sqlalchemy.orm import Session
 from core.auth import Principal
 from core.models import Device, Section
 from ingest.handlers import Derivation, derivation_failed, derive
+from ingest.liveness import heard_up_to
 from ingest.models import RawEvent, Snapshot
 from ingest.schemas import EVENT_ADAPTER, TailSnapshot
 from ingest.store import derive_error_text
@@ -80,18 +81,22 @@ def replay(session: Session, *, progress: Any = None) -> dict[str, int]:
     """Rebuild derived state; raw events and audit records themselves are never touched."""
     reset_derived(session)
     counts = {"events": 0, "failed": 0, "actions": 0, "refused_actions": 0}
+    last_raw = 0  # no event replayed yet: none heard
     for _, source, ident in _timeline(session):
         if source == 0:
             if not _derive(session, session.get_one(RawEvent, ident)):
                 counts["failed"] += 1
             counts["events"] += 1
+            last_raw = ident
         else:
             record = session.get_one(AuditRecord, ident)
             if record.actor_role == "system":
                 continue  # written by the derivation itself (a sweep's clearance), not an action
             who = Principal(role=record.actor_role, name=record.actor)
             try:
-                with session.begin_nested():
+                # The action came when the events replayed so far were stored: liveness is
+                # read from those, as it was live.
+                with session.begin_nested(), heard_up_to(session, last_raw):
                     actions.act(
                         session,
                         record.run_id,

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from datetime import datetime, timedelta
+from datetime import timedelta
 from typing import Any
 
 from sqlalchemy import select
@@ -12,59 +12,26 @@ from sqlalchemy.orm import Session
 from core.models import Car, Device, Section
 from core.schemas import format_instant
 from identification.consist import compare_consists
-from ingest.liveness import silent_at
 from ingest.models import Snapshot
 from service.clearance.certainty import judge
 from service.clearance.models import AxleReading, CarPassage, EotReport, Run
+from service.clearance.passage import liveness
 from service.clearance.readers import disagreement_reason, reader_disagreements
 from service.clearance.rules import (
     ConsistEvidence,
     EotEvidence,
     EotReading,
+    PassageSilence,
     RunEvidence,
     TailEvidence,
+    ZeroCount,
     eot_stands_in,
 )
-from service.setup.service import section_devices
 from tail_check.profile import CameraProfile
 
-EVIDENCE_DEVICE_KINDS = ("camera", "wheel_mark_reader", "ir_reader", "axle_counter")
-EOT_KINDS = ("eot_receiver",)
 DEFAULT_ABSENT_CONFIDENCE = CameraProfile().absent_confidence
 # An EOT report counts for the run between departure and this long after arrival (clearance.md).
 EOT_AFTER_ARRIVAL = timedelta(seconds=60)
-
-
-def moment(run: Run, side: str) -> datetime:
-    """The server time at which one side's devices are judged silent or alive: when the server
-    received the departure (or the arrival). Device times stand in for runs stored before
-    those were recorded."""
-    departure = run.departure_received_at or run.departed_at
-    if side == "departure":
-        return departure
-    return run.arrival_received_at or run.arrived_at or departure
-
-
-def owing_devices(
-    session: Session,
-    section: Section,
-    station: str,
-    at: datetime,
-    contributed: set[str],
-    kinds: tuple[str, ...] = EVIDENCE_DEVICE_KINDS,
-) -> list[str]:
-    """Devices at one end of the section whose evidence did not come and who were silent
-    (:func:`ingest.liveness.silent_at`) at server time ``at``.
-
-    Staleness only ever explains evidence that is missing: a device that reported for the run
-    counts with what it reported, however quiet it went afterwards, and a late report counts
-    when it comes. A decommissioned device owes nothing.
-    """
-    return [
-        device.id
-        for device in section_devices(session, section, station)
-        if device.kind in kinds and device.id not in contributed and silent_at(session, device, at)
-    ]
 
 
 # Every report counts, not the last one: the verdict that weighs most for safety stands for
@@ -105,7 +72,7 @@ def contradictions(snapshots: list[Snapshot], readings: list[AxleReading]) -> li
                 f"{s.verdict} (snapshot {s.id}, score {s.score or 0:.2f})" for s in seen
             )
             found.append(f"the {side} images contradict each other: tail disc {shown}")
-        counts = sorted({r.axles for r in readings if r.side == side})
+        counts = sorted({r.axles for r in readings if r.side == side and r.axles > 0})
         if len(counts) > 1:
             found.append(
                 f"the {side} axle counts contradict each other:"
@@ -165,7 +132,7 @@ def compare_families(
 def _axles(
     session: Session, readings: list[AxleReading], side: str, family_cars: list[str | None] | None
 ) -> int | None:
-    mine = [r.axles for r in readings if r.side == side]
+    mine = [r.axles for r in readings if r.side == side and r.axles > 0]  # 0 is no count
     if mine:  # every count counts: the pair that would prove a loss (fewest arrived, most left)
         return min(mine) if side == "arrival" else max(mine)
     if not family_cars or any(car is None or car.startswith("#") for car in family_cars):
@@ -248,15 +215,8 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         | {r.device_id for r in readings}
         | {e.device_id for e in eot_rows}
     )
-    arrival = moment(run, "arrival")
-    stale = set(owing_devices(session, section, run.to_station, arrival, contributed))
-    stale |= set(
-        owing_devices(session, section, run.from_station, moment(run, "departure"), contributed)
-    )
-    if run.eot_unit is not None:  # the receiver's silence matters only for EOT-equipped trains
-        stale |= set(
-            owing_devices(session, section, run.to_station, arrival, contributed, EOT_KINDS)
-        )
+    heard = liveness(session, run, section, contributed)
+    silences = tuple(PassageSilence(x.device, x.heard, x.until, x.ongoing) for x in heard.silences)
     families = consists(passages)
     consist, shown = compare_families(families)
     best = families.get("wheel") or families.get("ir") or {}
@@ -266,7 +226,9 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         consist=consist,
         departure_axles=_axles(session, readings, "departure", best.get("departure")),
         arrival_axles=_axles(session, readings, "arrival", best.get("arrival")),
-        stale_devices=tuple(sorted(stale)),
+        silences=silences,
+        zero_counts=tuple(ZeroCount(r.device_id, r.station) for r in readings if r.axles <= 0),
+        unheard=heard.unheard,
         eot=eot,
         contradictions=(*judged.doubts, *contradictions(snapshots, readings)),
     )
@@ -290,7 +252,18 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
         },
         "consist_comparison": shown,
         "axles": {"departure": evidence.departure_axles, "arrival": evidence.arrival_axles},
-        "stale_devices": sorted(stale),
+        "stale_devices": sorted({x.device for x in silences}),
+        "silent_while_passing": [
+            {
+                "device": x.device,
+                "heard_at": format_instant(x.heard),
+                "silent_until": format_instant(x.until),
+                "ongoing": x.ongoing,
+            }
+            for x in silences
+        ],
+        "unheard_devices": list(heard.unheard),
+        "zero_axle_counts": sorted({r.device_id for r in readings if r.axles <= 0}),
         "snapshot_ids": sorted(s.id for s in attached),
         "uncertain_evidence": sorted(judged.unproven),
         "eot": _eot_summary(evidence, eot_rows),

@@ -7,7 +7,10 @@ Nothing here touches the database: the service gathers a :class:`RunEvidence` an
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from datetime import datetime
 from typing import Literal
+
+from core.schemas import format_instant
 
 Verdict = Literal["complete", "incomplete", "undetermined"]
 
@@ -78,16 +81,41 @@ class EotEvidence:
 
 
 @dataclass(frozen=True)
+class PassageSilence:
+    """A device that sent nothing for the run and was silent past its heartbeat deadline
+    while the train may have passed it: nothing received after ``heard`` until ``until``
+    (``ongoing``: still nothing at the end of the window)."""
+
+    device: str
+    heard: datetime
+    until: datetime
+    ongoing: bool = True
+
+
+@dataclass(frozen=True)
+class ZeroCount:
+    """An axle count of 0 for a train: a counter that counted nothing, not a count."""
+
+    device: str
+    station: str
+
+
+@dataclass(frozen=True)
 class RunEvidence:
     arrival_tail: TailEvidence | None = None
     departure_tail: TailEvidence | None = None
     consist: ConsistEvidence | None = None
     departure_axles: int | None = None
     arrival_axles: int | None = None
-    stale_devices: tuple[str, ...] = field(default_factory=tuple)
+    # Devices whose evidence is missing because they were silent while the train passed.
+    silences: tuple[PassageSilence, ...] = field(default_factory=tuple)
     eot: EotEvidence | None = None
     # Reports of one side that disagree with each other (in words); never ``complete``.
     contradictions: tuple[str, ...] = field(default_factory=tuple)
+    # Axle counts of 0 (left out of the counts compared): each a doubt.
+    zero_counts: tuple[ZeroCount, ...] = field(default_factory=tuple)
+    # Arrival-end devices alive throughout that reported nothing for the train: named only.
+    unheard: tuple[str, ...] = field(default_factory=tuple)
 
 
 def _eot_last(evidence: RunEvidence) -> EotReading | None:
@@ -194,9 +222,11 @@ def _doubts(evidence: RunEvidence) -> list[str]:
     if d_axles is not None and a_axles is not None and a_axles > d_axles:
         doubts.append(f"{a_axles} axles arrived but only {d_axles} departed: the counts disagree")
     doubts.extend(evidence.contradictions)
-    for device in evidence.stale_devices:
+    doubts.extend(silence_words(silence) for silence in evidence.silences)
+    for zero in evidence.zero_counts:
         doubts.append(
-            f"device {device} is silent past its heartbeat deadline; its evidence is missing"
+            f"the axle counter {zero.device} at {zero.station} reported 0 axles for a train:"
+            " that is no count; a person must look"
         )
     last = _eot_last(evidence)
     if last is not None and EOT.vented_psig <= last.pressure_psig < EOT.whole_psig:
@@ -205,6 +235,23 @@ def _doubts(evidence: RunEvidence) -> list[str]:
             f" at arrival ({EOT.whole_psig} psig or more proves the train whole)"
         )
     return doubts
+
+
+def silence_words(silence: PassageSilence) -> str:
+    """A silent device in a dispatcher's words, with the times it was not heard."""
+    until = "" if silence.ongoing else f" to {format_instant(silence.until)}"
+    return (
+        f"device {silence.device} is silent past its heartbeat deadline while the train passed"
+        f" (nothing received from {format_instant(silence.heard)}{until}); its evidence is"
+        " missing; a person must look"
+    )
+
+
+def _unheard(evidence: RunEvidence) -> list[str]:
+    return [
+        f"device {device} is alive but reported nothing for this train: its evidence is missing"
+        for device in evidence.unheard
+    ]
 
 
 def _agreements(evidence: RunEvidence) -> list[str]:
@@ -233,14 +280,17 @@ def decide(evidence: RunEvidence) -> Decision:
     tail disc is present (or the train's own EOT unit reports ≥ 45 psig at arrival, standing in
     for it) and every item present agrees; otherwise undetermined. Reports of other EOT units
     are ignored, with a reason. A weak ``absent`` tail stays a doubt even with the EOT at
-    pressure: an item that is present and does not agree.
+    pressure: an item that is present and does not agree. A device silent while the train
+    passed, and an axle count of 0, are doubts; a live device that reported nothing is named
+    without changing the verdict.
 
     Parameters
     ----------
     evidence : RunEvidence
-        What the run has, each item ``None`` when missing (stale devices' evidence is left out).
+        What the run has, each item ``None`` when missing (silent devices' evidence is left
+        out).
     """
-    ignored = _eot_ignored(evidence)
+    ignored = [*_eot_ignored(evidence), *_unheard(evidence)]
     losses = _losses(evidence)
     if losses:
         return Decision("incomplete", (*losses, *ignored))

@@ -12,6 +12,7 @@ from fastapi.testclient import TestClient
 from tail_check.synth import render_snapshot
 from tests.conftest import ADMIN
 from tests.service.clock import ServerClock
+from tests.service.linekit import build_line
 
 T0 = datetime(2026, 11, 23, 10, 0, tzinfo=UTC)
 
@@ -36,6 +37,22 @@ class Line:
     serial: int = 0
     # With a clock, each event reaches the server at its device time, or at ``received``.
     clock: ServerClock | None = None
+
+    @classmethod
+    def clocked(cls, client: TestClient, clock: ServerClock, **line: Any) -> Line:
+        """A line whose events reach the server at their device times (or ``received``),
+        registered an hour before :data:`T0`: a device owes heartbeats only once registered
+        (``ingest.liveness.silent_during``), so it must exist before the trains run."""
+        clock.set(T0 - timedelta(hours=1))
+        return cls(client, build_line(client, **line), clock=clock)
+
+    def keep_alive(self, start: datetime, end: datetime, *, except_: tuple[str, ...] = ()) -> None:
+        """Every device but ``except_`` heartbeats each 30 s from ``start`` to ``end``, as a live
+        line does while a train passes (the heartbeat period is 60 s)."""
+        at = start
+        while at <= end:
+            self.heartbeat_all(at, except_=except_)
+            at += timedelta(seconds=30)
 
     def _arrives(self, at: datetime, received: datetime | None) -> None:
         if self.clock is not None:

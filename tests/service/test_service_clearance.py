@@ -157,10 +157,12 @@ def test_late_proof_of_loss_turns_free_into_alarm(line: Line) -> None:
 
 def test_stale_reader_counts_missing(client: TestClient, server_clock: ServerClock) -> None:  # noqa: F811
     # Silence is judged by receive times: each event reaches the server at its device time.
-    line = Line(client, build_line(client), clock=server_clock)
-    line.heartbeat_all(T0 - timedelta(seconds=20))
+    line = Line.clocked(client, server_clock)
+    line.keep_alive(T0 - timedelta(minutes=10), T0 - timedelta(seconds=20))
     line.depart()
-    line.heartbeat_all(ARRIVE - timedelta(seconds=20), except_=("B-ir",))
+    line.keep_alive(
+        ARRIVE - timedelta(minutes=10), ARRIVE - timedelta(seconds=20), except_=("B-ir",)
+    )
     line.snapshot("B-cam", ARRIVE - timedelta(seconds=5), jpeg(disc=True, seed=4))
     result = line.arrive(ARRIVE)
     assert result["verdict"] == "undetermined"

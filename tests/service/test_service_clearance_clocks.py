@@ -23,7 +23,6 @@ from service.clearance.models import AxleReading, Run
 from service.replay import replay
 from tests.service.clock import ServerClock, server_clock  # noqa: F401 (fixture)
 from tests.service.conflictkit import decide, run_of
-from tests.service.linekit import build_line
 from tests.service.scenario import T0, Line, jpeg
 from tests.service.test_service_clearance_groups import state
 
@@ -33,7 +32,7 @@ SECOND = timedelta(seconds=1)
 
 @pytest.fixture
 def line(client: TestClient, server_clock: ServerClock) -> Line:  # noqa: F811
-    return Line(client, build_line(client), clock=server_clock)
+    return Line.clocked(client, server_clock)
 
 
 def count(line: Line, device: str, axles: int, at: datetime, received: datetime) -> dict[str, Any]:
@@ -44,12 +43,12 @@ def short_train(line: Line, *, behind: timedelta, counted_late: bool = False) ->
     """16 axles leave A, counted by a counter whose clock is ``behind``; 12 reach B (correct
     clocks), the tail disc is seen. ``counted_late``: the departure count reaches the server
     only after the arrival was decided."""
-    line.heartbeat_all(T0 - 20 * SECOND)
+    line.keep_alive(T0 - 600 * SECOND, T0 - 20 * SECOND)
     line.depart(T0)
     passed = T0 + 15 * SECOND
     if not counted_late:
         assert count(line, "A-ac", 16, passed - behind, received=passed)["run"] is None
-    line.heartbeat_all(ARRIVE - 30 * SECOND)
+    line.keep_alive(ARRIVE - 600 * SECOND, ARRIVE - 30 * SECOND)
     count(line, "B-ac", 12, ARRIVE - 20 * SECOND, received=ARRIVE - 20 * SECOND)
     line.snapshot("B-cam", ARRIVE - 5 * SECOND, jpeg(disc=True, seed=21))
     result = line.arrive(ARRIVE)
@@ -94,11 +93,11 @@ def test_d2_a_late_departure_count_with_its_clock_behind_puts_a_freed_section_to
 
 def test_d2_a_counter_inside_the_window_still_proves_the_loss(line: Line) -> None:
     """A clock behind by less than the adoption window (seconds: clocks differ by that much)."""
-    line.heartbeat_all(T0 - 20 * SECOND)
+    line.keep_alive(T0 - 600 * SECOND, T0 - 20 * SECOND)
     run = line.depart(T0)
     passed = T0 + 15 * SECOND
     assert count(line, "A-ac", 16, passed - 70 * SECOND, received=passed)["run"] == run
-    line.heartbeat_all(ARRIVE - 30 * SECOND)
+    line.keep_alive(ARRIVE - 600 * SECOND, ARRIVE - 30 * SECOND)
     count(line, "B-ac", 12, ARRIVE - 20 * SECOND, received=ARRIVE - 20 * SECOND)
     result = line.arrive(ARRIVE)
     assert result["verdict"] == "incomplete", result
@@ -116,9 +115,9 @@ def _quick_follower(
     """2041 arrives at ARRIVE; its tail photo, taken 5 s before, is dated by a camera clock
     ``ahead`` and reaches the server at ``photo_received``; the dispatcher clears AB and 2043
     departs ``gap`` later, loses its tail on the way (no photo of its own)."""
-    line.heartbeat_all(T0 - 20 * SECOND)
+    line.keep_alive(T0 - 600 * SECOND, T0 - 20 * SECOND)
     r1 = line.depart(T0)
-    line.heartbeat_all(ARRIVE - 30 * SECOND)
+    line.keep_alive(ARRIVE - 600 * SECOND, ARRIVE - 30 * SECOND)
     taken = ARRIVE - 5 * SECOND
     photo_first = photo_received < ARRIVE
     if photo_first:
@@ -172,9 +171,9 @@ def test_d7_an_arrival_interlocking_clock_ahead_is_no_conflict(
     time 2043 left before 2041 arrived, by the server's it did not: no conflict alarm — and
     the section is not freed by the tolerance either (2043 holds it)."""
     ahead = timedelta(seconds=290)
-    line.heartbeat_all(T0 - 20 * SECOND)
+    line.keep_alive(T0 - 600 * SECOND, T0 - 20 * SECOND)
     line.depart(T0)
-    line.heartbeat_all(ARRIVE - 30 * SECOND)
+    line.keep_alive(ARRIVE - 600 * SECOND, ARRIVE - 30 * SECOND)
     line.read("A", [117, 118, 119, 120], T0 - 30 * SECOND)
     line.read("B", [117, 118, 119, 120], ARRIVE - 40 * SECOND)
     line.snapshot("B-cam", ARRIVE - 5 * SECOND, jpeg(disc=True, seed=21))
@@ -195,10 +194,10 @@ def test_arrival_count_dated_before_the_departure_does_not_free(line: Line) -> N
     """B's counter is 40 min behind: the 12 axles it counts at the arrival are dated before
     the train departed. Fits no run by time; received while the train held AB: review."""
     behind = timedelta(minutes=40)
-    line.heartbeat_all(T0 - 20 * SECOND)
+    line.keep_alive(T0 - 600 * SECOND, T0 - 20 * SECOND)
     line.depart(T0)
     count(line, "A-ac", 16, T0 + 15 * SECOND, received=T0 + 15 * SECOND)
-    line.heartbeat_all(ARRIVE - 30 * SECOND)
+    line.keep_alive(ARRIVE - 600 * SECOND, ARRIVE - 30 * SECOND)
     counted = ARRIVE - 20 * SECOND
     assert count(line, "B-ac", 12, counted - behind, received=counted)["run"] is None
     line.snapshot("B-cam", ARRIVE - 5 * SECOND, jpeg(disc=True, seed=21))
@@ -247,7 +246,7 @@ def _traffic(seed: int) -> list[tuple[datetime, str, str, datetime, dict[str, An
 
 
 def _play(line: Line, dispatcher: dict[str, str], events: list[Any]) -> None:
-    line.heartbeat_all(T0 - 20 * SECOND)
+    line.keep_alive(T0 - 600 * SECOND, T0 - 20 * SECOND)
     for received, device, kind, at, fields in events:
         line.heartbeat_all(received - 10 * SECOND)
         if kind == "snapshot":

@@ -16,7 +16,6 @@ from service.replay import replay
 from tests.conftest import ADMIN
 from tests.service.clock import ServerClock, server_clock  # noqa: F401 (fixture)
 from tests.service.conflictkit import arrive, decide, depart, resolve_all, run_of
-from tests.service.linekit import build_line
 from tests.service.reviewkit import TRANSIT, review_run
 from tests.service.scenario import T0, Line, jpeg
 from tests.service.test_service_replay import snapshot_of_state
@@ -155,7 +154,7 @@ def test_state_since_is_never_in_the_future(
     client: TestClient,
     server_clock: ServerClock,  # noqa: F811
 ) -> None:
-    line = Line(client, build_line(client), clock=server_clock)
+    line = Line.clocked(client, server_clock)
     line.heartbeat_all(T0 - timedelta(seconds=20))
     # the interlocking's clock runs 4 minutes ahead (inside the allowed skew)
     line.post("A-ilk", "train_departed", T0 + timedelta(minutes=4), received=T0, section="AB",
@@ -211,7 +210,7 @@ def test_a_silent_section_lets_the_dispatcher_block_a_train_that_never_arrived(
     session: Session,
     server_clock: ServerClock,  # noqa: F811
 ) -> None:
-    line = Line(client, build_line(client), clock=server_clock)
+    line = Line.clocked(client, server_clock)
     dispatcher = {"Authorization": f"Bearer {login(client, session, 'ivan')}"}
     line.heartbeat_all(T0 - timedelta(seconds=20))
     run = line.depart(T0)

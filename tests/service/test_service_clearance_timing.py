@@ -18,7 +18,6 @@ from sqlalchemy.orm import Session
 from ingest.liveness import stale_devices
 from tests.conftest import ADMIN
 from tests.service.clock import ServerClock, server_clock  # noqa: F401 (fixture)
-from tests.service.linekit import build_line
 from tests.service.scenario import T0, Line, jpeg
 
 ARRIVE = T0 + timedelta(minutes=20)
@@ -27,20 +26,22 @@ LATE = ARRIVE + timedelta(minutes=10)
 
 @pytest.fixture
 def line(client: TestClient, server_clock: ServerClock) -> Line:  # noqa: F811
-    return Line(client, build_line(client), clock=server_clock)
+    return Line.clocked(client, server_clock)
 
 
 def depart_with(line: Line, *, quiet: tuple[str, ...] = ()) -> int:
-    """Every device alive at departure but ``quiet`` (last heard of an hour before)."""
+    """Every device but ``quiet`` heard of throughout the 10 min before departure (``quiet``:
+    last heard of an hour before)."""
     for device in quiet:
         line.post(device, "heartbeat", T0 - timedelta(hours=1))
-    line.heartbeat_all(T0 - timedelta(seconds=20), except_=quiet)
+    line.keep_alive(T0 - timedelta(minutes=10), T0 - timedelta(seconds=20), except_=quiet)
     return line.depart()
 
 
 def arrive_with(line: Line, *, quiet: tuple[str, ...] = ()) -> dict:
-    """Every device but ``quiet`` heard of 30 s before arrival; the tail disc seen; arrival."""
-    line.heartbeat_all(ARRIVE - timedelta(seconds=30), except_=quiet)
+    """Every device but ``quiet`` heard of throughout the 10 min before arrival (the train may
+    have passed them then); the tail disc seen; arrival."""
+    line.keep_alive(ARRIVE - timedelta(minutes=10), ARRIVE - timedelta(seconds=30), except_=quiet)
     line.snapshot("B-cam", ARRIVE - timedelta(seconds=5), jpeg(disc=True, seed=21))
     return line.arrive(ARRIVE)
 
@@ -95,10 +96,10 @@ def _late_arrival_count(line: Line) -> None:
 
 def _clock_behind(line: Line) -> None:
     _departure_only(line)
-    # B-ir's clock is 3 h behind, but the server heard from it 30 s before arrival.
-    line.post(
-        "B-ir", "heartbeat", ARRIVE - timedelta(hours=3), received=ARRIVE - timedelta(seconds=30)
-    )
+    # B-ir's clock is 3 h behind, but the server hears from it each 30 s while the train passes.
+    for k in range(20):
+        received = ARRIVE - timedelta(minutes=10) + timedelta(seconds=30 * k)
+        line.post("B-ir", "heartbeat", received - timedelta(hours=3), received=received)
 
 
 TIMINGS = [

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from datetime import UTC, datetime, timedelta
 
 import pytest
 
@@ -12,9 +13,11 @@ from service.clearance.rules import (
     ConsistEvidence,
     EotEvidence,
     EotReading,
+    PassageSilence,
     RunEvidence,
     TailEvidence,
     Verdict,
+    ZeroCount,
     decide,
     departure_opens_sweep,
     next_state,
@@ -30,6 +33,12 @@ IDENTICAL = ConsistEvidence("identical", "consists identical (12 cars)")
 MISSING = ConsistEvidence("missing", "arrival consist lacks cars 0412, 0413 (positions 11–12)")
 UNKNOWN = ConsistEvidence("unknown", "positions 3, 7 unreadable")
 UNIT = 39572
+HEARD = datetime(2026, 11, 23, 10, 2, tzinfo=UTC)
+
+
+def silent(device: str) -> PassageSilence:
+    """``device`` not heard from 10:02Z on, while the train passed."""
+    return PassageSilence(device, HEARD, HEARD + timedelta(minutes=9))
 
 
 def eot(*pressures: int, unit: int | None = UNIT, other: int | None = None) -> EotEvidence:
@@ -98,13 +107,35 @@ CASES = [
     ),
     (
         "stale device",
-        RunEvidence(PRESENT, stale_devices=("B-cam",)),
+        RunEvidence(PRESENT, silences=(silent("B-cam"),)),
         "undetermined",
         "B-cam is silent",
     ),
     (
+        "silence is dated",
+        RunEvidence(PRESENT, silences=(silent("B-wm"),)),
+        "undetermined",
+        "B-wm is silent past its heartbeat deadline while the train passed (nothing received"
+        " from 2026-11-23T10:02:00Z)",
+    ),
+    (
+        "zero axles counted on both sides are no agreement",
+        RunEvidence(
+            PRESENT,
+            zero_counts=(ZeroCount("A-ac", "A"), ZeroCount("B-ac", "B")),
+        ),
+        "undetermined",
+        "the axle counter A-ac at A reported 0 axles for a train: that is no count",
+    ),
+    (
+        "a live reader that said nothing is named, the verdict unchanged",
+        RunEvidence(PRESENT, consist=IDENTICAL, unheard=("B-wm",)),
+        "complete",
+        "device B-wm is alive but reported nothing for this train",
+    ),
+    (
         "loss beats stale",
-        RunEvidence(ABSENT_SURE, stale_devices=("B-ir",)),
+        RunEvidence(ABSENT_SURE, silences=(silent("B-ir"),)),
         "incomplete",
         "no tail disc",
     ),
@@ -198,7 +229,7 @@ CASES = [
     ),
     (
         "EOT does not overrule a stale device",
-        RunEvidence(stale_devices=("B-eot",), eot=eot(89)),
+        RunEvidence(silences=(silent("B-eot"),), eot=eot(89)),
         "undetermined",
         "B-eot is silent",
     ),
@@ -238,10 +269,10 @@ AXLES = [(None, None), (48, 48), (48, 44), (44, 48), (48, None)]
 def test_every_combination_is_safe(departure_tail: TailEvidence | None) -> None:
     """Over all combinations: never "complete" without a present arrival tail, never without
     agreement, and always "incomplete" when an item proves loss."""
-    for arrival, consist, (dep, arr), stale in itertools.product(
-        TAILS, CONSISTS, AXLES, [(), ("X",)]
+    for arrival, consist, (dep, arr), stale, zeros in itertools.product(
+        TAILS, CONSISTS, AXLES, [(), (silent("X"),)], [(), (ZeroCount("X-ac", "X"),)]
     ):
-        evidence = RunEvidence(arrival, departure_tail, consist, dep, arr, stale)
+        evidence = RunEvidence(arrival, departure_tail, consist, dep, arr, stale, zero_counts=zeros)
         verdict = decide(evidence).verdict
         proves_loss = (
             (arrival is ABSENT_SURE)
@@ -253,6 +284,7 @@ def test_every_combination_is_safe(departure_tail: TailEvidence | None) -> None:
             arrival is PRESENT
             and consist in (None, IDENTICAL)
             and not stale
+            and not zeros  # a counter that counted 0 axles counted nothing
             and (dep is None or arr is None or dep == arr)
             # rule 2: a departure image without the disc contradicts the arrival's disc
             and departure_tail not in (ABSENT_SURE, ABSENT_WEAK)
@@ -288,7 +320,7 @@ def test_every_combination_with_eot_is_safe(eot_evidence: EotEvidence | None) ->
     )
     last = own[-1].pressure_psig if own else None
     for arrival, departure, consist, (dep, arr), stale in itertools.product(
-        TAILS, TAILS, CONSISTS, AXLES, [(), ("X",)]
+        TAILS, TAILS, CONSISTS, AXLES, [(), (silent("X"),)]
     ):
         evidence = RunEvidence(arrival, departure, consist, dep, arr, stale, eot_evidence)
         verdict = decide(evidence).verdict
@@ -354,7 +386,7 @@ def test_a_sweep_run_that_is_not_complete_never_frees_the_section(mode: str) -> 
     ``complete``, and the original run counts as cleared only when the sweep is complete."""
     verdicts: set[str] = set()
     for arrival, departure, consist, (dep, arr), stale, eot_evidence in itertools.product(
-        TAILS, TAILS, CONSISTS, AXLES, [(), ("X",)], EOTS
+        TAILS, TAILS, CONSISTS, AXLES, [(), (silent("X"),)], EOTS
     ):
         evidence = RunEvidence(arrival, departure, consist, dep, arr, stale, eot_evidence)
         verdict = decide(evidence).verdict
