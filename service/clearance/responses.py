@@ -89,8 +89,12 @@ class RunOut(Answer):
     )
     evidence: dict[str, Any] | None = Field(
         description="the evidence as gathered for the latest decision; ``stale_devices``"
-        " lists the devices whose evidence is missing because the server had not heard from"
-        " them within DEPOT_HEARTBEAT_S when it received the departure or arrival"
+        " lists the devices whose evidence is missing because the server heard nothing from"
+        " them for longer than DEPOT_HEARTBEAT_S while the train may have passed them, and"
+        " ``silent_while_passing`` when (``heard_at``: last heard; ``silent_until``: heard"
+        " again, or the end of the window when ``ongoing``); ``unheard_devices``: arrival-end"
+        " readers and counters alive throughout that reported nothing; ``zero_axle_counts``:"
+        " counters that reported 0 axles (no count)"
     )
     decision: DecisionOut | None
     overrides: list[AuditOut]
