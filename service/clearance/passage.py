@@ -11,8 +11,8 @@ earliest time the train may have passed to when the server received its report:
 
 * the arrival end: from the departure (at most ``believed_lateness`` before the arrival was
   received) to the arrival's receipt (:func:`passage_window`);
-* the departure end: the ``believed_lateness`` before the departure's receipt
-  (:func:`departure_window`).
+* the departure end: the ``believed_lateness`` before the departure's receipt, or the
+  arrival's if that came first (:func:`departure_window`).
 
 A device that is alive through the window but reported nothing for the train is named too
 (an arrival-end reader or counter: ``unheard``), without changing the verdict: the rules
@@ -68,14 +68,20 @@ def passage_window(
     departure: datetime, arrival: datetime, *, times: PassageTimes = PASSAGE
 ) -> Window:
     """The arrival end's window: from the departure's receipt, but at most
-    ``times.believed_lateness`` before the arrival's, to the arrival's receipt."""
-    return Window(max(departure, arrival - times.believed_lateness), arrival)
+    ``times.believed_lateness`` before the arrival's, to the arrival's receipt. A departure
+    received after the arrival (its link was down) says nothing of when the train passed the
+    arrival end: then the whole ``believed_lateness`` before the arrival counts."""
+    earliest = arrival - times.believed_lateness
+    return Window(departure if earliest < departure < arrival else earliest, arrival)
 
 
-def departure_window(departure: datetime, *, times: PassageTimes = PASSAGE) -> Window:
+def departure_window(
+    departure: datetime, arrival: datetime | None = None, *, times: PassageTimes = PASSAGE
+) -> Window:
     """The departure end's window: the ``times.believed_lateness`` before the departure's
-    receipt."""
-    return Window(departure - times.believed_lateness, departure)
+    receipt, or before the arrival's when that came first (the train had left by then)."""
+    left = departure if arrival is None else min(departure, arrival)
+    return Window(left - times.believed_lateness, left)
 
 
 @dataclass(frozen=True)
@@ -116,7 +122,7 @@ def run_windows(run: Run) -> tuple[Window, Window]:
     stand in for runs stored before the receive times were recorded."""
     departure = run.departure_received_at or run.departed_at
     arrival = run.arrival_received_at or run.arrived_at or departure
-    return departure_window(departure), passage_window(departure, arrival)
+    return departure_window(departure, arrival), passage_window(departure, arrival)
 
 
 def liveness(session: Session, run: Run, section: Section, contributed: set[str]) -> Liveness:

@@ -18,6 +18,7 @@ from fastapi.testclient import TestClient
 from sqlalchemy.orm import Session
 
 from service.replay import replay
+from tests.conftest import ADMIN
 from tests.service.clock import ServerClock, server_clock  # noqa: F401 (fixture)
 from tests.service.scenario import T0, Line, jpeg
 
@@ -159,3 +160,27 @@ def test_replay_reads_liveness_as_the_decision_did(
     after = line.section()["run"]
     assert after["decision"] == before["decision"], (before["decision"], after["decision"])
     assert after["evidence"] == before["evidence"]
+
+
+@pytest.mark.parametrize("silent", [False, True], ids=["all heard", "B-wm silent"])
+def test_a_departure_received_after_the_arrival_still_judges_the_arrival_end(
+    line: Line, silent: bool
+) -> None:
+    """A's interlocking link was down: its departure reaches the server 30 s after B's arrival
+    (the arrival waits for it, then the departure closes the run). The train passed B in the
+    10 min before the arrival was received, whatever the departure's receipt says."""
+    quiet = ("B-wm",) if silent else ()
+    line.keep_alive(T0 - 10 * 60 * SECOND, T0 - 20 * SECOND)
+    line.read("A", CARS, T0 - 30 * SECOND)
+    line.keep_alive(T0 + 10 * SECOND, ARRIVE - 30 * SECOND, except_=quiet)
+    if silent:
+        line.post("B-wm", "heartbeat", ARRIVE - 30 * SECOND)  # alive at the arrival's instant
+    line.read("B", CARS, ARRIVE - 60 * SECOND)
+    line.snapshot("B-cam", ARRIVE - 5 * SECOND, jpeg(disc=True, seed=21))
+    line.arrive(ARRIVE)
+    departed = line.post("A-ilk", "train_departed", T0, received=ARRIVE + 30 * SECOND,
+                         section="AB", train="2041")  # fmt: skip
+    run = line.client.get(f"/api/v1/runs/{departed['run']}", headers=ADMIN).json()
+    assert run["decision"]["verdict"] == ("undetermined" if silent else "complete"), run
+    named = [r.split()[1] for r in silent_reasons(run["decision"]["reasons"])]
+    assert named == (["B-wm"] if silent else []), run["decision"]["reasons"]
