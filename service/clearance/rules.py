@@ -249,7 +249,8 @@ def silence_words(silence: PassageSilence) -> str:
 
 def _unheard(evidence: RunEvidence) -> list[str]:
     return [
-        f"device {device} is alive but reported nothing for this train: its evidence is missing"
+        f"device {device} is alive but reported nothing for this train: the decision does not"
+        " rest on it"
         for device in evidence.unheard
     ]
 

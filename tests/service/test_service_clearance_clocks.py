@@ -48,7 +48,7 @@ def short_train(line: Line, *, behind: timedelta, counted_late: bool = False) ->
     passed = T0 + 15 * SECOND
     if not counted_late:
         assert count(line, "A-ac", 16, passed - behind, received=passed)["run"] is None
-    line.keep_alive(ARRIVE - 600 * SECOND, ARRIVE - 30 * SECOND)
+    line.keep_alive(T0 + 10 * SECOND, ARRIVE - 30 * SECOND)
     count(line, "B-ac", 12, ARRIVE - 20 * SECOND, received=ARRIVE - 20 * SECOND)
     line.snapshot("B-cam", ARRIVE - 5 * SECOND, jpeg(disc=True, seed=21))
     result = line.arrive(ARRIVE)
@@ -97,7 +97,7 @@ def test_d2_a_counter_inside_the_window_still_proves_the_loss(line: Line) -> Non
     run = line.depart(T0)
     passed = T0 + 15 * SECOND
     assert count(line, "A-ac", 16, passed - 70 * SECOND, received=passed)["run"] == run
-    line.keep_alive(ARRIVE - 600 * SECOND, ARRIVE - 30 * SECOND)
+    line.keep_alive(T0 + 10 * SECOND, ARRIVE - 30 * SECOND)
     count(line, "B-ac", 12, ARRIVE - 20 * SECOND, received=ARRIVE - 20 * SECOND)
     result = line.arrive(ARRIVE)
     assert result["verdict"] == "incomplete", result
@@ -117,7 +117,7 @@ def _quick_follower(
     departs ``gap`` later, loses its tail on the way (no photo of its own)."""
     line.keep_alive(T0 - 600 * SECOND, T0 - 20 * SECOND)
     r1 = line.depart(T0)
-    line.keep_alive(ARRIVE - 600 * SECOND, ARRIVE - 30 * SECOND)
+    line.keep_alive(T0 + 10 * SECOND, ARRIVE - 30 * SECOND)
     taken = ARRIVE - 5 * SECOND
     photo_first = photo_received < ARRIVE
     if photo_first:
@@ -173,7 +173,7 @@ def test_d7_an_arrival_interlocking_clock_ahead_is_no_conflict(
     ahead = timedelta(seconds=290)
     line.keep_alive(T0 - 600 * SECOND, T0 - 20 * SECOND)
     line.depart(T0)
-    line.keep_alive(ARRIVE - 600 * SECOND, ARRIVE - 30 * SECOND)
+    line.keep_alive(T0 + 10 * SECOND, ARRIVE - 30 * SECOND)
     line.read("A", [117, 118, 119, 120], T0 - 30 * SECOND)
     line.read("B", [117, 118, 119, 120], ARRIVE - 40 * SECOND)
     line.snapshot("B-cam", ARRIVE - 5 * SECOND, jpeg(disc=True, seed=21))
@@ -197,7 +197,7 @@ def test_arrival_count_dated_before_the_departure_does_not_free(line: Line) -> N
     line.keep_alive(T0 - 600 * SECOND, T0 - 20 * SECOND)
     line.depart(T0)
     count(line, "A-ac", 16, T0 + 15 * SECOND, received=T0 + 15 * SECOND)
-    line.keep_alive(ARRIVE - 600 * SECOND, ARRIVE - 30 * SECOND)
+    line.keep_alive(T0 + 10 * SECOND, ARRIVE - 30 * SECOND)
     counted = ARRIVE - 20 * SECOND
     assert count(line, "B-ac", 12, counted - behind, received=counted)["run"] is None
     line.snapshot("B-cam", ARRIVE - 5 * SECOND, jpeg(disc=True, seed=21))

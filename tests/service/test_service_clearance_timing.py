@@ -39,9 +39,9 @@ def depart_with(line: Line, *, quiet: tuple[str, ...] = ()) -> int:
 
 
 def arrive_with(line: Line, *, quiet: tuple[str, ...] = ()) -> dict:
-    """Every device but ``quiet`` heard of throughout the 10 min before arrival (the train may
-    have passed them then); the tail disc seen; arrival."""
-    line.keep_alive(ARRIVE - timedelta(minutes=10), ARRIVE - timedelta(seconds=30), except_=quiet)
+    """Every device but ``quiet`` heard of throughout the journey (the train may have passed
+    them then); the tail disc seen; arrival."""
+    line.keep_alive(T0 + timedelta(seconds=10), ARRIVE - timedelta(seconds=30), except_=quiet)
     line.snapshot("B-cam", ARRIVE - timedelta(seconds=5), jpeg(disc=True, seed=21))
     return line.arrive(ARRIVE)
 
