@@ -130,29 +130,40 @@ def _accept_batch(
         for _, event, body in first.values()
     }
     inserted, refused = insert_each_that_stores(session, list(rows.values()))
+    device_id = device.id  # an ORM attribute: read once, not a few times per event
     # Stored before this batch (a batch sent again): looked up together, in one query.
     before = stored_many(
-        session, [(device.id, e) for e in rows if (device.id, e) not in inserted | refused]
+        session,
+        [
+            (device_id, e)
+            for e in rows
+            if (device_id, e) not in inserted and (device_id, e) not in refused
+        ],
     )
     answers: list[dict[str, Any]] = []
+    liveness_only = False  # a new event no feature derives from: it only proves the device alive
     for index, event, body in first.values():
-        raw_id = inserted.get((device.id, event.event_id))
-        if (device.id, event.event_id) in refused:
-            results[index] = not_storable(event.event_id, refused[(device.id, event.event_id)])
+        ident = (device_id, event.event_id)
+        raw_id = inserted.get(ident)
+        if ident in refused:
+            results[index] = not_storable(event.event_id, refused[ident])
             continue
         if raw_id is None:
-            found = before.get((device.id, event.event_id))
-            results[index] = stored_item(session, device, event, body, answers, found)
+            results[index] = stored_item(session, device, event, body, answers, before.get(ident))
             continue
         values = rows[event.event_id]
         if values["result"]:
-            seen(session, device, values["received_at"], replaying=False)  # liveness only
+            liveness_only = True
             result = values["result"]
         else:
             row = derive_new(session, device, event, raw_id, values)
             answers.append(row)
             result = row["result"]
         results[index] = {"event_id": event.event_id, "status": "created", "result": result}
+    if liveness_only:
+        # Every event of the batch was received at one instant: the liveness rule applied for
+        # one of them is applied for all (``touched_at_end`` touches a device once per instant).
+        seen(session, device, received, replaying=False)
     for index, event, body in repeats:
         results[index] = stored_item(session, device, event, body, answers)
     write_answers(session, answers)
