@@ -17,11 +17,14 @@ Then single axle counts by connection count (2 to 32), floor and depot side by s
 issue's p99 of 50 ms is reachable on the machine at all.
 
 Run: ``.venv/bin/python -m bench.ingest`` (about 3 minutes; ``BENCH_ROUNDS`` and
-``BENCH_SECONDS`` shorten it).
+``BENCH_SECONDS`` shorten it). ``--only batches`` runs the batch comparison alone (the floor and
+depot with group commit, which a batch does not go through anyway): about a minute, for
+measuring a change to the batch path.
 """
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 import tempfile
@@ -141,13 +144,40 @@ def latency_by_connections(servers: dict[str, tuple[str, list[str]]]) -> None:
     print(f"  (p99 target {P99_TARGET_MS:g} ms; the floor's own p99 says what the machine allows)")
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(
+        prog="python -m bench.ingest", description="depot against the reference floor"
+    )
+    parser.add_argument(
+        "--only",
+        choices=["batches"],
+        help="run only this comparison (batches: floor and depot, batches of 500 heartbeats)",
+    )
+    only = parser.parse_args(argv).only
     generator = "wrk" if have_wrk() else "the Python client (install wrk for the real figures)"
     print(f"load generator: {generator}")
     floor_db = bench_database("depot_bench_floor")
     if floor_db.startswith("sqlite"):
         print("the floor needs PostgreSQL; nothing measured")
         return
+    if only == "batches":
+        batches_only(floor_db)
+    else:
+        everything(floor_db)
+
+
+def batches_only(floor_db: str) -> None:
+    """The batch comparison alone: the floor and depot (group commit on, as by default)."""
+    with ExitStack() as stack:
+        quiet = {"DEPOT_ACCESS_LOG": "false"}
+        grouped = stack.enter_context(serve(bench_database("depot_bench_ingest"), extra_env=quiet))
+        keys = setup_depot(grouped)
+        floor = stack.enter_context(serve_floor(floor_db, keys))
+        servers = {"floor": (floor, keys), "depot group commit": (grouped, keys)}
+        compare(servers, batch=BATCH, connections=BATCH_CONNECTIONS)
+
+
+def everything(floor_db: str) -> None:
     with ExitStack() as stack:
         # Without uvicorn's access log, as the floor runs (``--log-level warning``).
         quiet = {"DEPOT_ACCESS_LOG": "false"}

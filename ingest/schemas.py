@@ -376,6 +376,16 @@ def kind_of(model: type[EventBase]) -> str:
 EVENT_MODELS: tuple[type[EventBase], ...] = get_args(get_args(DeviceEvent)[0])
 EVENT_KINDS: tuple[str, ...] = tuple(kind_of(model) for model in EVENT_MODELS)
 ALL_EVENT_MODELS: tuple[type[EventBase], ...] = (*EVENT_MODELS, TailSnapshot)
+# The models whose ``model_dump()`` is a copy of their ``__dict__`` (no nested model, field
+# serializer or computed field; ``tests/service/test_service_events.py`` checks every kind):
+# the idempotency hash reads them directly (``ingest.rows.event_sha256``).
+FLAT_MODELS: frozenset[type[EventBase]] = frozenset(
+    m
+    for m in ALL_EVENT_MODELS
+    if not m.__pydantic_decorators__.field_serializers
+    and not m.__pydantic_decorators__.model_serializers
+    and not m.__pydantic_computed_fields__
+)
 MODEL_BY_KIND: dict[str, type[EventBase]] = {kind_of(m): m for m in ALL_EVENT_MODELS}
 # Which event kinds each device kind may send, from the models' `senders`.
 ALLOWED_KINDS: dict[str, frozenset[str]] = {
