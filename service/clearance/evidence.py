@@ -263,7 +263,7 @@ def gather(session: Session, run: Run, section: Section) -> Gathered:
             for x in silences
         ],
         "unheard_devices": list(heard.unheard),
-        "zero_axle_counts": sorted({r.device_id for r in readings if r.axles <= 0}),
+        "zero_axle_counts": sorted({z.device for z in evidence.zero_counts}),
         "snapshot_ids": sorted(s.id for s in attached),
         "uncertain_evidence": sorted(judged.unproven),
         "eot": _eot_summary(evidence, eot_rows),
