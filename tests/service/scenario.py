@@ -9,6 +9,7 @@ from typing import Any
 import cv2
 from fastapi.testclient import TestClient
 
+from ingest.liveness import LAST_SEEN_GRANULARITY, heartbeat_limit
 from tail_check.synth import render_snapshot
 from tests.conftest import ADMIN
 from tests.service.clock import ServerClock
@@ -30,6 +31,30 @@ def jpeg(*, disc: bool, condition: str = "day", seed: int = 7, weak: bool = Fals
     return data.tobytes()
 
 
+def alive_step() -> timedelta:
+    """The longest step between heartbeats that keeps a device provably alive: a device is
+    silent when nothing of it was received for *longer* than the heartbeat period
+    (``DEPOT_HEARTBEAT_S``, 60 s), and the stored ``last_seen_at`` may lag the last receipt
+    by up to ``LAST_SEEN_GRANULARITY`` (5 s): heard each 55 s, even that stored value is never
+    more than 60 s old. (``test_a_gap_counts_only_past_the_heartbeat_period`` shows 55 s
+    alive.) A smaller step proves nothing more and costs a post per device per step: heartbeats
+    are most of a journey's requests, and they cannot share a batch, which comes from one
+    device and is received at one instant (``ingest.liveness.touched_at_end``)."""
+    step = heartbeat_limit() - LAST_SEEN_GRANULARITY
+    assert step > timedelta(0), step
+    return step
+
+
+def alive_times(start: datetime, end: datetime) -> list[datetime]:
+    """``start``, each :func:`alive_step` after it, and ``end``: no gap in [start, end] is
+    longer than the step (the window's end is heard too, not up to a step before it)."""
+    step, times, at = alive_step(), [], start
+    while at < end:
+        times.append(at)
+        at += step
+    return [*times, end] if end >= start else times
+
+
 @dataclass
 class Line:
     client: TestClient
@@ -47,12 +72,11 @@ class Line:
         return cls(client, build_line(client, **line), clock=clock)
 
     def keep_alive(self, start: datetime, end: datetime, *, except_: tuple[str, ...] = ()) -> None:
-        """Every device but ``except_`` heartbeats each 30 s from ``start`` to ``end``, as a live
-        line does while a train passes (the heartbeat period is 60 s)."""
-        at = start
-        while at <= end:
+        """Every device but ``except_`` heartbeats from ``start`` to ``end``, as a live line
+        does while a train passes: each :func:`alive_step` and at ``end`` itself, so that the
+        line is heard throughout [start, end] whatever the window's length."""
+        for at in alive_times(start, end):
             self.heartbeat_all(at, except_=except_)
-            at += timedelta(seconds=30)
 
     def _arrives(self, at: datetime, received: datetime | None) -> None:
         if self.clock is not None:

@@ -5,7 +5,8 @@ liveness only from the events stored before the one it derives from, so ``depot 
 gives the decision shown live even when a receive time is older than its row.
 
 Each event reaches the server at its device time (the server's clock is the test's); the
-heartbeat period is 60 s and the line's devices heartbeat each 30 s while alive.
+heartbeat period is 60 s and the line's devices heartbeat each 55 s while alive
+(``Line.keep_alive``).
 """
 
 from __future__ import annotations
@@ -39,10 +40,10 @@ def journey(
     heard: dict[str, list[datetime]] | None = None,
     arrival_reads: bool = True,
 ) -> dict[str, Any]:
-    """Train 2041 (cars 117–120) from A to B: every device but ``quiet`` heartbeats each 30 s
-    from 10 min before the departure to the arrival; ``heard`` gives quiet devices their own
-    heartbeats. Both IR readers read the cars (B's only with ``arrival_reads``), the tail disc
-    is seen on arrival. Returns the arrival's answer."""
+    """Train 2041 (cars 117–120) from A to B: every device but ``quiet`` heartbeats
+    (``Line.keep_alive``) from 10 min before the departure to the arrival; ``heard`` gives
+    quiet devices their own heartbeats. Both IR readers read the cars (B's only with
+    ``arrival_reads``), the tail disc is seen on arrival. Returns the arrival's answer."""
     own = sorted((at, device) for device, times in (heard or {}).items() for at in times)
     for at, device in own:
         if at < T0:

@@ -5,7 +5,8 @@ may have passed it, else the section goes to review naming it; an axle count of 
 
 Every event is played in the order the server receives it (``Plan``); the server's clock is the
 test's (``tests/service/clock``). Unless a case says otherwise the line is healthy: every device
-at A and B heartbeats each 30 s, the train is read, counted and photographed at both ends.
+at A and B heartbeats as a live line does (each 55 s and at the end of the time it is alive,
+``scenario.alive_times``), the train is read, counted and photographed at both ends.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from tests.conftest import ADMIN
 from tests.service.clock import ServerClock, server_clock  # noqa: F401 (fixture)
 from tests.service.conflictkit import run_of
 from tests.service.linekit import post_ok
-from tests.service.scenario import T0, Line, iso, jpeg
+from tests.service.scenario import T0, Line, alive_times, iso, jpeg
 from tests.service.test_service_replay import snapshot_of_state
 
 S = timedelta(seconds=1)
@@ -39,6 +40,15 @@ CARS = [117, 118, 119, 120]
 @pytest.fixture
 def line(client: TestClient, server_clock: ServerClock) -> Line:  # noqa: F811
     return Line.clocked(client, server_clock)
+
+
+def grid(start: datetime, end: datetime, step: timedelta) -> list[datetime]:
+    """``start`` and each ``step`` after it up to ``end`` (``end`` only when on the grid)."""
+    times, at = [], start
+    while at <= end:
+        times.append(at)
+        at += step
+    return times
 
 
 @dataclass
@@ -69,16 +79,17 @@ class Plan:
         devices: Iterable[str],
         start: datetime,
         end: datetime,
-        step: timedelta = 30 * S,
+        step: timedelta | None = None,
         dated: Callable[[datetime], datetime] = lambda at: at,
     ) -> None:
-        """``devices`` heartbeat every ``step`` from ``start`` to ``end`` (receive times);
-        ``dated`` gives the device's clock for each."""
+        """``devices`` heartbeat from ``start`` to ``end`` (receive times): each ``step`` from
+        ``start`` (the boundary cases' exact timings), or by default as a live line does
+        (``scenario.alive_times``: each 55 s and at ``end``); ``dated`` gives the device's
+        clock for each."""
+        times = alive_times(start, end) if step is None else grid(start, end, step)
         for device in devices:
-            at = start
-            while at <= end:
+            for at in times:
                 self.post(device, "heartbeat", dated(at), received=at)
-                at += step
 
     def play(self) -> dict[str, Any]:
         for _, _, label, fn in sorted(self.items, key=lambda item: (item[0], item[1])):
@@ -174,10 +185,11 @@ def test_heartbeats_exactly_every_60s_are_alive(line: Line, session: Session) ->
 
 
 def test_a_gap_of_61s_inside_the_passage_is_silence(line: Line, session: Session) -> None:
+    """A boundary case: its heartbeats keep their exact 30 s timings."""
     plan = Plan(line)
-    plan.beat(set(ENDS) - {"B-ir"}, T0 - 10 * M, ARRIVE + 30 * S)
-    plan.beat(["B-ir"], T0 - 10 * M, ARRIVE - 3 * M)
-    plan.beat(["B-ir"], ARRIVE - 3 * M + 61 * S, ARRIVE + 30 * S)
+    plan.beat(set(ENDS) - {"B-ir"}, T0 - 10 * M, ARRIVE + 30 * S, step=30 * S)
+    plan.beat(["B-ir"], T0 - 10 * M, ARRIVE - 3 * M, step=30 * S)
+    plan.beat(["B-ir"], ARRIVE - 3 * M + 61 * S, ARRIVE + 30 * S, step=30 * S)
     evidence(plan, skip=("B-ir",))
     run = plan.play()["depart"]["run"]
     assert_review_naming(line, run, "B-ir")
@@ -204,9 +216,7 @@ def test_devices_that_never_see_the_train_do_not_matter(line: Line, session: Ses
 def test_heartbeats_in_batches_keep_a_device_alive(line: Line, session: Session) -> None:
     plan = Plan(line)
     plan.beat(set(ENDS) - {"B-ir", "B-wm"}, T0 - 10 * M, ARRIVE + 30 * S)
-    at = T0 - 10 * M
-    n = 0
-    while at <= ARRIVE + 30 * S:
+    for n, at in enumerate(alive_times(T0 - 10 * M, ARRIVE + 30 * S)):
 
         def send(at: datetime = at, n: int = n) -> None:
             line.clock.set(at)  # type: ignore[union-attr]
@@ -225,8 +235,6 @@ def test_heartbeats_in_batches_keep_a_device_alive(line: Line, session: Session)
             assert answer.status_code == 200, answer.text
 
         plan.add(at, send)
-        at += 30 * S
-        n += 1
     evidence(plan)
     run = plan.play()["depart"]["run"]
     assert_free(line, run)
@@ -261,7 +269,7 @@ def test_device_clock_years_behind_still_heartbeats_by_receive_time(
     line: Line, session: Session
 ) -> None:
     """B-ir's clock says 2001 (1999 is refused: times before 2000 are 422) but the server hears
-    it every 30 s: alive (named: reported nothing), the train is complete."""
+    it as a live line (each 55 s): alive (named: reported nothing), the train is complete."""
     plan = Plan(line)
     plan.beat(set(ENDS) - {"B-ir"}, T0 - 10 * M, ARRIVE + 30 * S)
     plan.beat(
@@ -376,7 +384,7 @@ def test_arrival_reaching_the_server_late(
 ) -> None:
     """B's interlocking link is down: the arrival (dated ARRIVE) reaches the server ``late_min``
     late. B-ir was silent from T0+``silent_min`` min to ARRIVE+5 min (the train passed it at
-    ARRIVE-40 s), then heard again every 30 s.
+    ARRIVE-40 s), then heard again as a live line.
 
     Found by the trial (fixed since), 30 min late: it was complete/free: the arrival end was
     judged only over the 10 min before the arrival's receipt (believed_lateness), though the
