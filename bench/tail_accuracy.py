@@ -51,7 +51,8 @@ from dataclasses import dataclass
 
 import cv2
 
-from tail_check import detect
+from tail_check import DetectionResult, detect
+from tail_check.confirm import confirm_with
 from tail_check.dataset import Sample, real_dir, real_photos, scenes
 from tail_check.evaluate import Tally
 from tail_check.pipeline import (
@@ -76,13 +77,15 @@ class Seen:
     sample: Sample
     hand: str
     candidates: list[Candidate]
+    result: DetectionResult
 
 
 def _seen(samples: list[Sample]) -> list[Seen]:
-    return [
-        Seen(s, detect(s.image).verdict, find_candidates(s.image, PIPELINE_PROFILE)[0])
-        for s in samples
-    ]
+    out = []
+    for s in samples:
+        result = detect(s.image)
+        out.append(Seen(s, result.verdict, find_candidates(s.image, PIPELINE_PROFILE)[0], result))
+    return out
 
 
 def _tally(seen: list[Seen], variant: str, model: str | None) -> Tally:
@@ -91,6 +94,8 @@ def _tally(seen: list[Seen], variant: str, model: str | None) -> Tally:
     for item in seen:
         if model is None:
             verdict = item.hand
+        elif variant == "confirmed":
+            verdict = confirm_with(item.candidates, 1.0, item.result, load_model(model)).verdict
         else:
             verdict = judge(item.candidates, load_model(model), params, item.hand)[0]  # type: ignore[arg-type]
         out.add(item.sample, verdict)
@@ -109,14 +114,19 @@ def _report(
         for part, ps in photos.items():
             print("\n".join(_tally(ps, variant, None).lines(f"baseline: real photos ({part})")))
         return
-    if variant not in ("guarded", "learned"):
-        raise SystemExit(f"unknown variant {variant!r}; use baseline, guarded or learned")
+    if variant not in ("guarded", "learned", "confirmed"):
+        raise SystemExit(
+            f"unknown variant {variant!r}; use baseline, confirmed, guarded or learned"
+        )
     for g in ("A", "B"):
         other = "B" if g == "A" else "A"
         own = _tally(held[g], variant, g)
         print("\n".join(own.lines(f"{variant}: generator {g}, own (trained on {g})")))
         cross = _tally(held[g], variant, other)
         print("\n".join(cross.lines(f"{variant}: generator {g}, CROSS (trained on {other})")))
+        if variant == "confirmed":  # the service's model
+            both = _tally(held[g], variant, "AB")
+            print("\n".join(both.lines(f"{variant}: generator {g}, service (trained on AB)")))
     for name in models:
         for part, ps in photos.items():
             real = _tally(ps, variant, name)
@@ -129,7 +139,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--offset", type=int, default=0, help="first held-out scene (seed 300000 + offset)"
     )
-    parser.add_argument("--variant", nargs="+", default=["baseline", "learned", "guarded"])
+    parser.add_argument(
+        "--variant", nargs="+", default=["baseline", "confirmed", "learned", "guarded"]
+    )
     parser.add_argument("--models", nargs="+", default=list(MODELS), help="for the real photos")
     args = parser.parse_args(argv)
     os.environ.setdefault("DEPOT_TAIL_CACHE", "var/tail_cache")

@@ -11,10 +11,12 @@ issue asks for is
     ratio = p50(decode + detect) / p50(JPEG decode alone)
 
 with ``decode + detect`` = :func:`tail_check.detect_snapshot` (the service's path: the
-JPEG decoder reduces in the DCT domain as far as the working scale allows) and the
-decode alone = a full decode (:func:`tail_check.decode_snapshot`). Also shown: the
-old path (full decode, then :func:`tail_check.detect`), the reduced decode alone, and
-with ``--learned`` the learned pipeline and the guarded combination.
+JPEG decoder reduces in the DCT domain as far as the working scale allows; a ``present``
+is then confirmed by the learned verifier, :func:`tail_check.confirm`) and the decode
+alone = a full decode (:func:`tail_check.decode_snapshot`). Also shown: the same without
+the verifier's check (it runs on ``present`` verdicts only, and most of these snapshots
+show a disc), the old path (full decode, then :func:`tail_check.detect`), the reduced
+decode alone, and with ``--learned`` the learned pipeline and the guarded combination.
 
 Run: ``.venv/bin/python -m bench.tail_check [--count N] [--learned]``
 """
@@ -28,7 +30,7 @@ from collections.abc import Callable
 
 import cv2
 
-from tail_check import decode_snapshot, detect, detect_snapshot
+from tail_check import ConfirmParams, decode_snapshot, detect, detect_snapshot
 from tail_check.snapshot import reduction_for
 from tail_check.synth import iter_snapshots
 
@@ -37,6 +39,9 @@ SIZE = (1920, 1080)
 QUALITY = 90
 REPEAT = 3
 TARGET = 1.5
+UNCONFIRMED = ConfirmParams(enabled=False)
+"""The hand-tuned detector's verdict without the learned verifier's check of a ``present``
+(the service's path before issue 11's check; shown for the cost of the check)."""
 
 
 def _calls(fn: Callable[[bytes], object], data: bytes) -> tuple[list[float], list[float]]:
@@ -56,6 +61,7 @@ def _variants(learned: bool) -> dict[str, Callable[[bytes], object]]:
         "decode (full)": decode_snapshot,
         f"decode (1/{factor}, DCT domain)": lambda j: decode_snapshot(j, reduce=factor),
         "detect_snapshot (decode + detect)": detect_snapshot,
+        "  the same, hand-tuned only": lambda j: detect_snapshot(j, confirmed=UNCONFIRMED),
         "full decode + detect (old path)": lambda j: detect(decode_snapshot(j)),
     }
     if learned:

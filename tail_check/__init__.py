@@ -7,7 +7,9 @@ calibration, the two-camera comparison, overlays for the review screen and the
 
 Public API::
 
-    detect(image_bgr, profile=None) -> DetectionResult
+    detect(image_bgr, profile=None) -> DetectionResult (the hand-tuned detector)
+    confirm(image_bgr, result) -> DetectionResult (a present the learned verifier doubts
+        becomes uncertain; the service's and the CLI's verdicts are confirmed)
     compare(departure_bgr, arrival_bgr, profile=None) -> Comparison
     compare_with_departure(departure_result, departure_bgr, arrival_bgr, profile=None)
     calibrate(image_bgr, (x, y)) -> CameraProfile
@@ -19,6 +21,7 @@ Public API::
 
 from .calibrate import calibrate
 from .compare import Comparison, compare, compare_with_departure
+from .confirm import ConfirmParams, confirm
 from .detect import WORK_SIDE, DetectionResult, Verdict, detect
 from .overlay import overlay_png, render_overlay
 from .profile import DEFAULT_PROFILE, CameraProfile, load_profile
@@ -30,12 +33,14 @@ __all__ = [
     "WORK_SIDE",
     "CameraProfile",
     "Comparison",
+    "ConfirmParams",
     "DetectionResult",
     "DiscCandidate",
     "Verdict",
     "calibrate",
     "compare",
     "compare_with_departure",
+    "confirm",
     "decode_snapshot",
     "detect",
     "detect_snapshot",

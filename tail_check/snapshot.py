@@ -16,6 +16,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from .confirm import CONFIRM_PARAMS, ConfirmParams, confirm
 from .detect import WORK_SIDE, DetectionResult, detect_reduced
 from .profile import CameraProfile
 
@@ -131,8 +132,10 @@ def detect_snapshot(
     profile: CameraProfile | None = None,
     *,
     params: ReducedDecode = DEFAULT_REDUCED_DECODE,
+    confirmed: ConfirmParams = CONFIRM_PARAMS,
 ) -> DetectionResult:
-    """Decode a snapshot (JPEG at reduced size where that keeps enough pixels) and detect.
+    """Decode a snapshot (JPEG at reduced size where that keeps enough pixels) and detect;
+    a ``present`` must then be confirmed by the learned verifier (:func:`~.confirm.confirm`).
 
     EXIF orientation is ignored, as the service's own decoder does. Anything that is not
     a plain JPEG (PNG, CMYK JPEG, an unreadable header, a decoder that does not reduce
@@ -152,10 +155,11 @@ def detect_snapshot(
         image = cv2.imdecode(buf, _REDUCED[factor] | cv2.IMREAD_IGNORE_ORIENTATION)
         expected = (math.ceil(size[1] / factor), math.ceil(size[0] / factor))
         if image is not None and image.shape[:2] == expected:
-            return detect_reduced(np.asarray(image, np.uint8), profile, full_size=size)
+            reduced = np.asarray(image, np.uint8)
+            return confirm(reduced, detect_reduced(reduced, profile, full_size=size), confirmed)
     image = cv2.imdecode(buf, cv2.IMREAD_COLOR | cv2.IMREAD_IGNORE_ORIENTATION)
     if image is None:
         raise ValueError("image data is not a decodable JPEG or PNG")
-    return detect_reduced(
-        np.asarray(image, np.uint8), profile, full_size=(image.shape[1], image.shape[0])
-    )
+    full = np.asarray(image, np.uint8)
+    result = detect_reduced(full, profile, full_size=(full.shape[1], full.shape[0]))
+    return confirm(full, result, confirmed)

@@ -14,8 +14,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..profile import CameraProfile
-from .features import FEATURE_NAMES, FEATURE_PARAMS, Candidate, FeatureParams, describe
-from .proposals import PROPOSAL_PARAMS, Maps, ProposalParams, make_maps, propose
+from .features import FEATURE_NAMES, FEATURE_PARAMS, BBox, Candidate, FeatureParams, describe
+from .proposals import PROPOSAL_PARAMS, Maps, Proposal, ProposalParams, make_maps, propose
 
 __all__ = ["FEATURE_NAMES", "Candidate", "CandidateParams", "find_candidates"]
 
@@ -49,9 +49,20 @@ def _same(a: tuple[float, float, float], b: tuple[float, float, float], c: Candi
     return close and max(ra, rb) <= c.same_radius * max(1e-3, min(ra, rb))
 
 
-def candidates_of(m: Maps, params: CandidateParams = CANDIDATE_PARAMS) -> list[Candidate]:
-    """Merged, described candidates of prepared maps."""
+def _inside(pr: Proposal, m: Maps, where: BBox) -> bool:
+    """Whether a proposal's centre, in image pixels, lies in the box ``where``."""
+    x, y = m.origin[0] + pr.cx / m.scale, m.origin[1] + pr.cy / m.scale
+    return where[0] <= x <= where[0] + where[2] and where[1] <= y <= where[1] + where[3]
+
+
+def candidates_of(
+    m: Maps, params: CandidateParams = CANDIDATE_PARAMS, where: BBox | None = None
+) -> list[Candidate]:
+    """Merged, described candidates of prepared maps; with ``where`` (x, y, w, h in image
+    pixels) only those proposed there (describing is most of the stage's time)."""
     props = sorted(propose(m, params.proposals), key=lambda p: -p.response)
+    if where is not None:
+        props = [pr for pr in props if _inside(pr, m, where)]
     red_share = float((m.redness >= params.features.red_pixel).mean())
     scene = (m.bright, red_share)
     found: list[Candidate] = []
@@ -66,8 +77,13 @@ def candidates_of(m: Maps, params: CandidateParams = CANDIDATE_PARAMS) -> list[C
 
 
 def find_candidates(
-    image: NDArray[np.uint8], p: CameraProfile, params: CandidateParams = CANDIDATE_PARAMS
+    image: NDArray[np.uint8],
+    p: CameraProfile,
+    params: CandidateParams = CANDIDATE_PARAMS,
+    *,
+    where: BBox | None = None,
 ) -> tuple[list[Candidate], Maps]:
-    """Candidates of one BGR snapshot under a camera profile, and the maps they came from."""
+    """Candidates of one BGR snapshot under a camera profile (only those proposed inside
+    ``where``, image pixels, when given), and the maps they came from."""
     m = make_maps(image, p, params.proposals)
-    return candidates_of(m, params), m
+    return candidates_of(m, params, where), m
