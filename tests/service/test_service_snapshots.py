@@ -136,3 +136,23 @@ def test_a_camera_clock_ahead_of_the_server_is_refused(client: TestClient) -> No
     retry = client.post("/api/v1/snapshots", data={**form, "occurred_at": "2026-11-23T10:41:00Z"},
                         files=files, headers=keys["B-cam"])  # fmt: skip
     assert retry.status_code == 201, "a refused event leaves nothing behind to conflict with"
+
+
+@pytest.mark.parametrize(("ext", "mime"), [(".jpg", "image/jpeg"), (".png", "image/png")])
+def test_a_hand_wheel_the_hand_tuned_detector_calls_a_disc_is_stored_uncertain(
+    client: TestClient, ext: str, mime: str
+) -> None:
+    """The service's verdict is the confirmed one (issue 11): generator A's held-out hand
+    wheel, a `present` for the hand-tuned detector alone, is stored `uncertain` on both
+    decode paths (JPEG reduced in the DCT domain, PNG in full)."""
+    from tail_check import detect
+    from tail_check.dataset import scenes
+
+    sample = next(scenes("A", "heldout", 1, offset=44))
+    assert sample.kind == "hand_wheel" and detect(sample.image).verdict == "present"
+    ok, data = cv2.imencode(ext, sample.image)
+    assert ok
+    keys = build_line(client)
+    response = upload(client, keys["B-cam"], data.tobytes(), name=f"tail{ext}", content_type=mime)
+    assert response.status_code == 201, response.text
+    assert response.json()["verdict"] == "uncertain"
