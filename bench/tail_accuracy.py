@@ -75,17 +75,14 @@ class Seen:
     and the pipeline's candidates (each model then only scores them)."""
 
     sample: Sample
-    hand: str
     candidates: list[Candidate]
-    result: DetectionResult
+    hand: DetectionResult
 
 
 def _seen(samples: list[Sample]) -> list[Seen]:
-    out = []
-    for s in samples:
-        result = detect(s.image)
-        out.append(Seen(s, result.verdict, find_candidates(s.image, PIPELINE_PROFILE)[0], result))
-    return out
+    return [
+        Seen(s, find_candidates(s.image, PIPELINE_PROFILE)[0], detect(s.image)) for s in samples
+    ]
 
 
 def _tally(seen: list[Seen], variant: str, model: str | None) -> Tally:
@@ -93,11 +90,11 @@ def _tally(seen: list[Seen], variant: str, model: str | None) -> Tally:
     params = VerdictParams(combine=variant)  # type: ignore[arg-type]
     for item in seen:
         if model is None:
-            verdict = item.hand
+            verdict = item.hand.verdict
         elif variant == "confirmed":
-            verdict = confirm_with(item.candidates, 1.0, item.result, load_model(model)).verdict
+            verdict = confirm_with(item.candidates, 1.0, item.hand, load_model(model)).verdict
         else:
-            verdict = judge(item.candidates, load_model(model), params, item.hand)[0]  # type: ignore[arg-type]
+            verdict = judge(item.candidates, load_model(model), params, item.hand.verdict)[0]
         out.add(item.sample, verdict)
     return out
 

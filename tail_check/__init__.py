@@ -9,7 +9,9 @@ Public API::
 
     detect(image_bgr, profile=None) -> DetectionResult (the hand-tuned detector)
     confirm(image_bgr, result) -> DetectionResult (a present the learned verifier doubts
-        becomes uncertain; the service's and the CLI's verdicts are confirmed)
+        becomes uncertain)
+    detect_confirmed(image_bgr, profile=None) -> DetectionResult (detect, then confirm:
+        the service's and the CLI's verdict)
     compare(departure_bgr, arrival_bgr, profile=None) -> Comparison
     compare_with_departure(departure_result, departure_bgr, arrival_bgr, profile=None)
     calibrate(image_bgr, (x, y)) -> CameraProfile
@@ -21,7 +23,7 @@ Public API::
 
 from .calibrate import calibrate
 from .compare import Comparison, compare, compare_with_departure
-from .confirm import ConfirmParams, confirm
+from .confirm import ConfirmParams, confirm, detect_confirmed
 from .detect import WORK_SIDE, DetectionResult, Verdict, detect
 from .overlay import overlay_png, render_overlay
 from .profile import DEFAULT_PROFILE, CameraProfile, load_profile
@@ -43,6 +45,7 @@ __all__ = [
     "confirm",
     "decode_snapshot",
     "detect",
+    "detect_confirmed",
     "detect_snapshot",
     "load_profile",
     "overlay_png",

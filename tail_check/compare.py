@@ -16,8 +16,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from .confirm import confirm
-from .detect import DetectionResult, Verdict, check_image, detect
+from .confirm import detect_confirmed
+from .detect import DetectionResult, Verdict, check_image
 from .profile import DEFAULT_PROFILE, CameraProfile
 
 __all__ = ["Comparison", "compare", "compare_with_departure", "run_profile"]
@@ -124,10 +124,10 @@ def compare_with_departure(
     base = profile if profile is not None else DEFAULT_PROFILE
     dep_img, arr_img = check_image(departure_bgr), check_image(arrival_bgr)
     if departure.verdict != "present" or departure.bbox is None:
-        arrival = confirm(arr_img, detect(arr_img, base))
+        arrival = detect_confirmed(arr_img, base)
         reasons = (f"departure disc {departure.verdict}: arrival judged alone", *arrival.reasons)
         return Comparison(arrival.verdict, arrival.score, departure, arrival, False, None, reasons)
-    arrival = confirm(arr_img, detect(arr_img, run_profile(departure, base)))
+    arrival = detect_confirmed(arr_img, run_profile(departure, base))
     if arrival.verdict == "absent":
         reasons = (
             "disc present at departure, absent on arrival: rear part may be lost",
@@ -172,5 +172,5 @@ def compare(
     Comparison
     """
     dep_profile = departure_profile if departure_profile is not None else profile
-    departure = confirm(departure_bgr, detect(departure_bgr, dep_profile))
+    departure = detect_confirmed(departure_bgr, dep_profile)
     return compare_with_departure(departure, departure_bgr, arrival_bgr, profile)

@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from .detect import DetectionResult
+from .detect import DetectionResult, detect
 from .pipeline import (
     PIPELINE_PROFILE,
     Candidate,
@@ -37,8 +37,9 @@ from .pipeline import (
     find_candidates,
     load_model,
 )
+from .profile import CameraProfile
 
-__all__ = ["CONFIRM_PARAMS", "ConfirmParams", "confirm", "confirm_with"]
+__all__ = ["CONFIRM_PARAMS", "ConfirmParams", "confirm", "confirm_with", "detect_confirmed"]
 
 
 @dataclass(frozen=True)
@@ -67,6 +68,29 @@ class ConfirmParams:
 CONFIRM_PARAMS = ConfirmParams()
 
 
+def _checked(result: DetectionResult, params: ConfirmParams) -> bool:
+    """Whether ``result`` is a ``present`` the verifier must confirm."""
+    return params.enabled and result.verdict == "present" and result.bbox is not None
+
+
+def _grown(result: DetectionResult, scale: float, grow: float) -> tuple[float, ...]:
+    """``result``'s box in pixels ``scale`` times its own, grown by ``grow`` of its width and
+    height on each side, as (x0, y0, x1, y1)."""
+    assert result.bbox is not None
+    x, y, w, h = (v * scale for v in result.bbox)
+    gx, gy = w * grow, h * grow
+    return x - gx, y - gy, x + w + gx, y + h + gy
+
+
+def detect_confirmed(
+    image_bgr: NDArray[np.uint8],
+    profile: CameraProfile | None = None,
+    params: ConfirmParams = CONFIRM_PARAMS,
+) -> DetectionResult:
+    """The service's verdict of one image: :func:`~.detect.detect`, then :func:`confirm`."""
+    return confirm(image_bgr, detect(image_bgr, profile), params)
+
+
 def confirm(
     image_bgr: NDArray[np.uint8],
     result: DetectionResult,
@@ -88,14 +112,13 @@ def confirm(
         ``result`` itself unless it is a ``present`` the verifier does not confirm; then
         the same with verdict ``uncertain`` and the verifier's reason first.
     """
-    if not params.enabled or result.verdict != "present" or result.bbox is None:
+    if not _checked(result, params):
         return result
     scale = image_bgr.shape[1] / max(1, result.image_size[0])
-    x, y, w, h = (v * scale for v in result.bbox)
     # Only proposals near the region are described (most of the verifier's time); the
-    # margin is twice ``near`` because segmentation can move a candidate's centre.
-    gx, gy = w * params.near * params.search_margin, h * params.near * params.search_margin
-    where = (int(x - gx), int(y - gy), int(w + 2 * gx) + 1, int(h + 2 * gy) + 1)
+    # margin is wider than ``near`` because segmentation can move a candidate's centre.
+    x0, y0, x1, y1 = _grown(result, scale, params.near * params.search_margin)
+    where = (int(x0), int(y0), int(x1 - x0) + 1, int(y1 - y0) + 1)
     candidates, _ = find_candidates(image_bgr, PIPELINE_PROFILE, where=where)
     return confirm_with(candidates, scale, result, load_model(params.model), params)
 
@@ -109,15 +132,13 @@ def confirm_with(
 ) -> DetectionResult:
     """:func:`confirm` given the verifier's candidates of the image (their boxes in pixels
     ``scale`` times ``result``'s), so one set of candidates can be judged by several models."""
-    if not params.enabled or result.verdict != "present" or result.bbox is None:
+    if not _checked(result, params):
         return result
-    x, y, w, h = (v * scale for v in result.bbox)
-    gx, gy = w * params.near, h * params.near
+    x0, y0, x1, y1 = _grown(result, scale, params.near)
     near = [
         c
         for c in candidates
-        if x - gx <= c.bbox[0] + c.bbox[2] / 2 <= x + w + gx
-        and y - gy <= c.bbox[1] + c.bbox[3] / 2 <= y + h + gy
+        if x0 <= c.bbox[0] + c.bbox[2] / 2 <= x1 and y0 <= c.bbox[1] + c.bbox[3] / 2 <= y1
     ]
     _, prob = best_candidate(near, model)
     doubt_below = float(model.meta["uncertain_threshold"])

@@ -65,11 +65,10 @@ def detect_stored(path: Path, content_type: str, profile: Any) -> dict[str, Any]
     """The single-camera detection of a stored image. A JPEG is decoded at reduced size in the
     DCT domain (``tail_check.detect_snapshot``: the detector works at a fixed scale of about
     400 pixels, so most of a 1080p decode was thrown away); any other image in full. A
-    ``present`` must be confirmed by the learned verifier (``tail_check.confirm``)."""
+    ``present`` must be confirmed by the learned verifier (``tail_check.detect_confirmed``)."""
     if content_type == "image/jpeg":
         return tail_check.detect_snapshot(path.read_bytes(), profile).to_dict()
-    image = load_bgr(path)
-    return tail_check.confirm(image, tail_check.detect(image, profile)).to_dict()
+    return tail_check.detect_confirmed(load_bgr(path), profile).to_dict()
 
 
 def _detection(

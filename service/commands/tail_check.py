@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from service.commands._common import SEED, fail, number
-from tail_check import DEFAULT_PROFILE, CameraProfile, calibrate, confirm, detect, load_profile
+from tail_check import DEFAULT_PROFILE, CameraProfile, calibrate, detect_confirmed, load_profile
 from tail_check.study import StudyResult, StudySample, epsilon_curves
 from tail_check.synth import write_study_set
 
@@ -49,9 +49,8 @@ def _tail_check(args: argparse.Namespace) -> int:
     failed = False
     for name in args.files:
         try:
-            image = _read_image(name)
             # the service's verdict: a present must be confirmed by the learned verifier
-            result = confirm(image, detect(image, profile))
+            result = detect_confirmed(_read_image(name), profile)
         except ValueError as exc:
             fail(str(exc))
             failed = True

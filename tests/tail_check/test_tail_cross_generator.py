@@ -138,7 +138,7 @@ def test_hand_tuned_detector_never_calls_a_lit_lamp_a_disc() -> None:
 
 @pytest.mark.xfail(
     strict=True,
-    reason="known false present of the hand-tuned detector (the service's) on generator B's"
+    reason="known false present of the hand-tuned detector alone on generator B's"
     " held-out seed 300498: a lit signal head beside the track at dusk, 13 working pixels"
     " across. Its glow is as narrow as the blurred outline of a disc that size (1.9 working"
     " pixels; discs with a shining reflector measure 1.7-3.3), so the lamp check cannot tell"
