@@ -23,20 +23,16 @@ verdicts cost nothing more.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .detect import DetectionResult, detect
-from .pipeline import (
-    PIPELINE_PROFILE,
-    Candidate,
-    TreeModel,
-    best_candidate,
-    find_candidates,
-    load_model,
-)
+from .pipeline import PIPELINE_PROFILE, Candidate, TreeModel, load_model
+from .pipeline.candidates import iter_candidates
+from .pipeline.proposals import make_maps
 from .profile import CameraProfile
 
 __all__ = ["CONFIRM_PARAMS", "ConfirmParams", "confirm", "confirm_with", "detect_confirmed"]
@@ -119,31 +115,38 @@ def confirm(
     # margin is wider than ``near`` because segmentation can move a candidate's centre.
     x0, y0, x1, y1 = _grown(result, scale, params.near * params.search_margin)
     where = (int(x0), int(y0), int(x1 - x0) + 1, int(y1 - y0) + 1)
-    candidates, _ = find_candidates(image_bgr, PIPELINE_PROFILE, where=where)
+    maps = make_maps(image_bgr, PIPELINE_PROFILE)
+    # Lazily: the first near candidate the verifier believes ends the search, with the
+    # verdict all of them would give (a present stays present; only a doubt needs them all).
+    candidates = iter_candidates(maps, where=where)
     return confirm_with(candidates, scale, result, load_model(params.model), params)
 
 
 def confirm_with(
-    candidates: list[Candidate],
+    candidates: Iterable[Candidate],
     scale: float,
     result: DetectionResult,
     model: TreeModel,
     params: ConfirmParams = CONFIRM_PARAMS,
 ) -> DetectionResult:
     """:func:`confirm` given the verifier's candidates of the image (their boxes in pixels
-    ``scale`` times ``result``'s), so one set of candidates can be judged by several models."""
+    ``scale`` times ``result``'s), so one set of candidates can be judged by several models.
+
+    ``candidates`` is consumed only until a candidate near the region reaches the model's
+    abstention threshold: the verdict is then ``result`` whatever the rest would say.
+    """
     if not _checked(result, params):
         return result
     x0, y0, x1, y1 = _grown(result, scale, params.near)
-    near = [
-        c
-        for c in candidates
-        if x0 <= c.bbox[0] + c.bbox[2] / 2 <= x1 and y0 <= c.bbox[1] + c.bbox[3] / 2 <= y1
-    ]
-    _, prob = best_candidate(near, model)
     doubt_below = float(model.meta["uncertain_threshold"])
-    if prob >= doubt_below:
-        return result
+    prob = 0.0
+    for c in candidates:
+        cx, cy = c.bbox[0] + c.bbox[2] / 2, c.bbox[1] + c.bbox[3] / 2
+        if not (x0 <= cx <= x1 and y0 <= cy <= y1):
+            continue
+        prob = max(prob, float(model.probability(c.features[None, :])[0]))
+        if prob >= doubt_below:
+            return result
     reason = (
         f"disc-shaped, but the learned verifier doubts it (disc probability {prob:.2f}, "
         f"below {doubt_below:.2f}); a person must look"

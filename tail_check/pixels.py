@@ -13,7 +13,15 @@ from numpy.typing import NDArray
 
 from .shape import ramp
 
-__all__ = ["channel_extreme", "percentile_u8", "std_u8", "subtract_level", "veil_level"]
+__all__ = [
+    "channel_extreme",
+    "median_u8",
+    "percentile_u8",
+    "quantile_f32_u8",
+    "std_u8",
+    "subtract_level",
+    "veil_level",
+]
 
 
 def veil_level(image: NDArray[np.uint8], *, floor: float = 15.0, onset: float = 25.0) -> float:
@@ -51,6 +59,36 @@ def percentile_u8(values: NDArray[np.uint8], q: float) -> float:
     step = above - below
     # numpy's lerp: from the nearer end, so that gamma near 1 rounds like numpy does.
     return float(below + step * gamma) if gamma < 0.5 else float(above - step * (1 - gamma))
+
+
+def quantile_f32_u8(values: NDArray[np.uint8], q: float) -> float:
+    """``np.quantile(values.astype(np.float32), q)`` bit for bit (numpy interpolates
+    between the two order statistics in float32), from a 256-bin histogram."""
+    counts = cv2.calcHist([np.ascontiguousarray(values)], [0], None, [256], [0, 256])
+    cum = np.cumsum(counts.ravel().astype(np.int64))
+    n = int(cum[-1])
+    position = (n - 1) * q
+    lo = min(math.floor(position), n - 1)
+    gamma = position - lo
+    below = np.float32(np.searchsorted(cum, lo, side="right"))
+    above = np.float32(np.searchsorted(cum, min(lo + 1, n - 1), side="right"))
+    step = above - below
+    # numpy's lerp, from the nearer end, in float32 (a Python float keeps numpy's dtype).
+    return float(below + step * gamma if gamma < 0.5 else above - step * (1 - gamma))
+
+
+def median_u8(values: NDArray[np.uint8]) -> np.float32:
+    """``np.median`` of a uint8 array's values as float32 (the median of the same values
+    as float32, bit for bit: an even count gives the mean of the two middle values,
+    exact in float32), from a 256-bin histogram instead of a partition."""
+    counts = cv2.calcHist([np.ascontiguousarray(values)], [0], None, [256], [0, 256])
+    cum = np.cumsum(counts.ravel().astype(np.int64))
+    n = int(cum[-1])
+    upper = np.float32(np.searchsorted(cum, n // 2, side="right"))
+    if n % 2:
+        return upper
+    lower = np.float32(np.searchsorted(cum, n // 2 - 1, side="right"))
+    return np.float32((lower + upper) / np.float32(2))
 
 
 def std_u8(values: NDArray[np.uint8]) -> float:

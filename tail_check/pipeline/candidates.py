@@ -8,6 +8,7 @@ nearly coincide are merged, keeping the one with the strongest proposal.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,7 +18,14 @@ from ..profile import CameraProfile
 from .features import FEATURE_NAMES, FEATURE_PARAMS, BBox, Candidate, FeatureParams, describe
 from .proposals import PROPOSAL_PARAMS, Maps, Proposal, ProposalParams, make_maps, propose
 
-__all__ = ["FEATURE_NAMES", "Candidate", "CandidateParams", "find_candidates"]
+__all__ = [
+    "FEATURE_NAMES",
+    "Candidate",
+    "CandidateParams",
+    "candidates_of",
+    "find_candidates",
+    "iter_candidates",
+]
 
 
 @dataclass(frozen=True)
@@ -55,11 +63,13 @@ def _inside(pr: Proposal, m: Maps, where: BBox) -> bool:
     return where[0] <= x <= where[0] + where[2] and where[1] <= y <= where[1] + where[3]
 
 
-def candidates_of(
+def iter_candidates(
     m: Maps, params: CandidateParams = CANDIDATE_PARAMS, where: BBox | None = None
-) -> list[Candidate]:
-    """Merged, described candidates of prepared maps; with ``where`` (x, y, w, h in image
-    pixels) only those proposed there (describing is most of the stage's time)."""
+) -> Iterator[Candidate]:
+    """Merged, described candidates of prepared maps, strongest proposal first, described
+    only as they are asked for (describing is most of the stage's time, and a caller that
+    has its answer can stop); with ``where`` (x, y, w, h in image pixels) only those
+    proposed there."""
     props = sorted(propose(m, params.proposals), key=lambda p: -p.response)
     if where is not None:
         props = [pr for pr in props if _inside(pr, m, where)]
@@ -68,12 +78,19 @@ def candidates_of(
     found: list[Candidate] = []
     for pr in props:
         if len(found) >= params.max_candidates:
-            break
+            return
         cand = describe(m, pr, scene, params.features)
         if cand is None or any(_same(cand.circle, f.circle, params) for f in found):
             continue
         found.append(cand)
-    return found
+        yield cand
+
+
+def candidates_of(
+    m: Maps, params: CandidateParams = CANDIDATE_PARAMS, where: BBox | None = None
+) -> list[Candidate]:
+    """All of :func:`iter_candidates`."""
+    return list(iter_candidates(m, params, where))
 
 
 def find_candidates(

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..colour import band_mask
+from ..pixels import channel_extreme, median_u8, quantile_f32_u8
 from ..profile import CameraProfile
 
 __all__ = ["Maps", "Proposal", "ProposalParams", "make_maps", "propose", "region_box"]
@@ -156,44 +157,36 @@ def make_maps(
     sigma_px = p.sigma * c.work_side
     if sigma_px >= 0.3:
         work = cv2.GaussianBlur(work, (0, 0), sigma_px)
-    band = band_mask(
-        np.asarray(work, np.uint8), p.reference_rgb, p.c_delta, gain_range=p.gain_range
-    )
+    work_u8 = np.asarray(work, np.uint8)
+    band = band_mask(work_u8, p.reference_rgb, p.c_delta, gain_range=p.gain_range)
     bgr = np.asarray(work, np.float32)
     b, g, r = bgr[..., 0], bgr[..., 1], bgr[..., 2]
-    top = np.maximum(r, np.maximum(g, b))
+    top_u8 = channel_extreme(work_u8, cv2.max)
+    top = top_u8.astype(np.float32)
     redness = np.clip((r - np.maximum(g, b)) / (r + EPS), 0.0, 1.0)
     chroma = r / (r + g + b + 3 * EPS)
-    bright = max(c.min_bright, float(np.quantile(top, c.bright_quantile)) / 255.0)
+    # Histogram statistics of the uint8 crop: numpy's quantile and median, bit for bit.
+    bright = max(c.min_bright, quantile_f32_u8(top_u8, c.bright_quantile) / 255.0)
     value = np.asarray(np.clip(top / (255.0 * bright), 0.0, 1.0), np.float32)
     evidence = np.asarray(redness * np.clip(value / c.value_knee, 0.0, 1.0), np.float32)
-    ones = np.ones_like(redness)
-    balanced = _grey_world(bgr)
+    balanced = _grey_world(bgr, work_u8)
     wb_top = np.maximum(balanced[..., 1], balanced[..., 0])
     red_wb = np.clip((balanced[..., 2] - wb_top) / (balanced[..., 2] + EPS), 0.0, 1.0)
-    clipped = (top >= c.clip_level).astype(np.float32)
-    stack = np.dstack(
-        [
-            ones,
-            redness,
-            chroma,
-            value,
-            evidence,
-            band.astype(np.float32),
-            redness**2,
-            red_wb,
-            clipped,
-        ]
-    )
+    layers = (redness, chroma, value, evidence, band, redness**2, red_wb, top >= c.clip_level)
+    stack = np.empty((*redness.shape, 1 + len(layers)), np.float32)
+    stack[..., 0] = 1.0
+    for k, layer in enumerate(layers, start=1):
+        stack[..., k] = layer
     return Maps(
         bgr, redness, chroma, value, evidence, band, bright, (x, y), scale, c.work_side, stack
     )
 
 
-def _grey_world(bgr: F32) -> F32:
+def _grey_world(bgr: F32, work: NDArray[np.uint8]) -> F32:
     """The crop white-balanced by the grey-world rule (each channel's median to their
-    mean): a camera's colour cast or a dusk light does not make every surface redder."""
-    med = np.median(bgr.reshape(-1, 3), axis=0) + EPS
+    mean): a camera's colour cast or a dusk light does not make every surface redder.
+    ``work`` is ``bgr`` as uint8 (its medians come from histograms)."""
+    med = np.array([median_u8(work[..., k]) for k in range(3)], np.float32) + EPS
     gains = (float(med.mean()) / med).astype(np.float32)
     return np.asarray(bgr * gains[None, None, :], np.float32)
 
@@ -211,9 +204,11 @@ def _blobs(m: Maps, c: ProposalParams, lit: bool) -> list[Proposal]:
         diff = cv2.blur(field, (k_in, k_in)) - cv2.blur(field, (k_out, k_out))
         size = max(3, 2 * int(r) + 1)
         peaks = (diff >= cv2.dilate(diff, np.ones((size, size), np.uint8))) & (diff >= floor)
-        ys, xs = np.nonzero(peaks)
-        if xs.size == 0:
+        # OpenCV lists the peaks in numpy's row-major order, tens of times faster.
+        where = cv2.findNonZero(peaks.view(np.uint8))
+        if where is None:
             continue
+        xs, ys = where.reshape(-1, 2).T
         strength = diff[ys, xs]
         for i in np.argsort(-strength)[: c.max_blobs]:
             out.append(Proposal(float(xs[i]), float(ys[i]), r, source, float(strength[i])))

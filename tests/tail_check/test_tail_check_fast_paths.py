@@ -21,7 +21,7 @@ from tail_check import DEFAULT_PROFILE, decode_snapshot, detect, detect_snapshot
 from tail_check.colour import TABLE_MIN_PIXELS, band_mask
 from tail_check.detect import detect_reduced
 from tail_check.labels import label_areas, label_box, label_regions
-from tail_check.pixels import percentile_u8, std_u8
+from tail_check.pixels import median_u8, percentile_u8, quantile_f32_u8, std_u8
 from tail_check.regions import _median_colour
 from tail_check.shape import median
 from tail_check.snapshot import ReducedDecode, jpeg_size, reduction_for
@@ -55,6 +55,22 @@ def test_histogram_percentile_and_std_are_numpys() -> None:
         for q in (0, 2, 50, 90, 100):
             assert percentile_u8(values, q) == float(np.percentile(values, q))
         assert std_u8(values) == pytest.approx(float(values.std()), rel=1e-12, abs=1e-12)
+
+
+def test_histogram_quantile_and_median_are_numpys_on_float32() -> None:
+    """The verifier's maps took ``np.quantile`` and ``np.median`` of the crop as float32;
+    the histogram versions give the same float32 values (a 1-ulp change once moved a
+    scene's bright level)."""
+    rng = _rng("histogram_f32")
+    for _ in range(400):
+        h, w = (int(v) for v in rng.integers(1, 120, 2))
+        shape = (float(rng.uniform(0.2, 5)), float(rng.uniform(0.2, 5)))
+        values = (rng.beta(*shape, (h, w)) * 255).astype(np.uint8)
+        as_f32 = values.astype(np.float32)
+        for q in (0.0, 0.01, 0.5, 0.9, 0.99, 1.0):
+            assert quantile_f32_u8(values, q) == float(np.quantile(as_f32, q))
+        median = median_u8(values)
+        assert median.dtype == np.float32 and median == np.median(as_f32)
 
 
 def test_uint8_band_is_the_float_band_on_every_colour() -> None:

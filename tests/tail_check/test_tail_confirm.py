@@ -12,14 +12,19 @@ from __future__ import annotations
 import os
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
 import pytest
 from numpy.typing import NDArray
 
+import tail_check.pipeline.candidates as candidates_stage
 from tail_check import ConfirmParams, confirm, detect, detect_snapshot
+from tail_check.confirm import CONFIRM_PARAMS, confirm_with
 from tail_check.dataset import Sample, scenes
+from tail_check.detect import DetectionResult
+from tail_check.pipeline import PIPELINE_PROFILE, find_candidates, load_model
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -114,3 +119,49 @@ def test_most_true_discs_stay_present() -> None:
         kept += confirm(sample.image, hand).verdict == "present"
     assert total == 84
     assert kept / total >= MEASURED_KEPT - 0.02, (kept, total)
+
+
+def _confirmed_on_every_candidate(
+    image: NDArray[np.uint8], hand: DetectionResult
+) -> DetectionResult:
+    """:func:`confirm` as it was first written: every candidate proposed in the searched
+    box (the region grown by ``near * search_margin`` of its size) described, then judged
+    together."""
+    assert hand.bbox is not None
+    x, y, w, h = hand.bbox
+    grow = CONFIRM_PARAMS.near * CONFIRM_PARAMS.search_margin
+    x0, y0, x1, y1 = x - w * grow, y - h * grow, x + w + w * grow, y + h + h * grow
+    where = (int(x0), int(y0), int(x1 - x0) + 1, int(y1 - y0) + 1)
+    candidates, _ = find_candidates(image, PIPELINE_PROFILE, where=where)
+    return confirm_with(candidates, 1.0, hand, load_model("AB"))
+
+
+def test_confirming_stops_describing_once_the_verifier_believes_a_candidate(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Describing candidates is most of the check's time; once one near the region is
+    believed, the rest cannot change a present, so they are not described. The answer is
+    the one judging every candidate gives, for confirmed and doubted presents alike."""
+    described = [0]
+    plain_describe = candidates_stage.describe
+
+    def counting(*args: Any, **kwargs: Any) -> Any:
+        described[0] += 1
+        return plain_describe(*args, **kwargs)
+
+    monkeypatch.setattr(candidates_stage, "describe", counting)
+    fewer = kept = doubted = 0
+    for sample in scenes("A", "heldout", 40):
+        hand = detect(sample.image)
+        if hand.verdict != "present":
+            continue
+        described[0] = 0
+        quick = confirm(sample.image, hand)
+        lazily = described[0]
+        described[0] = 0
+        assert quick == _confirmed_on_every_candidate(sample.image, hand), sample.name
+        fewer += lazily < described[0]
+        kept += quick.verdict == "present"
+        doubted += quick.verdict == "uncertain"
+    assert kept >= 10 and doubted >= 1, (kept, doubted)
+    assert fewer >= kept * 0.8, (fewer, kept)
