@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._canvas import SKY_DEPTH, Cam, Canvas, Colour, jitter, noise_field, shade
+from ._canvas import SKY_DEPTH, Cam, Canvas, jitter, noise_field, shade
 
 FAR_Z = 160.0
 SKY = {
@@ -108,12 +108,7 @@ def draw_track(
         cv.poly(_quad(cam, x - 0.04, x + 0.04, 0.16, zn, zf), (40.0, 45.0, 55.0), zf)
         a, b = cam.p(x, 0.17, zn), cam.p(x, 0.17, zf)
         cv.line(a, b, rail_top, max(1.0, cam.scale(zn) * 0.05))
-    if main:
-        _track_shadow(cv, cam, xt, zn)
-
-
-def _track_shadow(cv: Canvas, cam: Cam, xt: float, zn: float) -> None:
-    del cv, cam, xt, zn
+    del main
 
 
 def draw_poles(
@@ -160,7 +155,3 @@ def draw_scene_background(
     draw_track(cv, cam, xt, rng, snowy, True)
     draw_poles(cv, cam, xt, z0, rng, rng.random() < 0.7)
     cv.depth[cv.depth >= SKY_DEPTH] = SKY_DEPTH
-
-
-def _unused(c: Colour) -> Colour:
-    return c

@@ -113,7 +113,7 @@ def noise_field(rng: np.random.Generator, w: int, h: int, cell: float) -> F32:
     gw, gh = max(2, int(w / max(cell, 1.0)) + 2), max(2, int(h / max(cell, 1.0)) + 2)
     small = rng.standard_normal((gh, gw)).astype(np.float32)
     big = cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
-    return np.clip(big * 0.6, -1.0, 1.0).astype(np.float32)
+    return np.asarray(np.clip(big * 0.6, -1.0, 1.0), dtype=np.float32)
 
 
 def jitter(rng: np.random.Generator, c: Colour, amount: float) -> Colour:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from ._canvas import Cam, Canvas, Colour, circle3, jitter, shade
@@ -134,7 +135,7 @@ def draw_body_side(
             1.55,
             car.top,
             car.z0 + 12.2,
-            c if False else shade(car.colour, sun * 1.0),
+            c,
         )
     step = {"box": 0.7, "gondola": 1.3, "hopper": 1.6, "flat": 0.3}[car.kind]
     xr = x if car.kind != "flat" else car.side * 1.22
@@ -219,8 +220,6 @@ def draw_tank(cv: Canvas, cam: Cam, car: Car, length: float, sun: float) -> None
     r, cy = car.half_w * 0.92, (car.top + car.beam_hi) / 2
     near = cam.pts(circle3(car.xt, cy, car.z0, r, 40))
     far = cam.pts(circle3(car.xt, cy, car.z0 + length, r, 40))
-    import cv2
-
     hull = cv2.convexHull(np.vstack([near, far]).astype(np.float32)).reshape(-1, 2)
     cv.poly(hull.astype(np.float64), shade(car.colour, sun), car.z0 + 1)
     cv.poly(near, car.colour, car.z0)

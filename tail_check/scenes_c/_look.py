@@ -44,7 +44,7 @@ def _lamp_pool(cv: Canvas, rng: np.random.Generator) -> F32:
     cx, cy = rng.uniform(0.2, 0.8) * cv.w, rng.uniform(0.3, 0.9) * cv.h
     r = rng.uniform(0.3, 0.7) * cv.w
     pool = 1.0 + rng.uniform(1.5, 4.0) * np.exp(-((xx - cx) ** 2 + (yy - cy) ** 2) / (r * r))
-    return pool.astype(np.float32)
+    return np.asarray(pool, dtype=np.float32)
 
 
 def fog(img: F32, depth: F32, rng: np.random.Generator, vis: float) -> F32:
@@ -64,7 +64,7 @@ def rain(img: F32, rng: np.random.Generator) -> F32:
         cv2.line(
             layer, (int(x), int(y)), (int(x + ang * length), int(y + length)), 1.0, 1, cv2.LINE_AA
         )
-    layer = cv2.GaussianBlur(layer, (0, 0), 0.8)
+    layer = np.asarray(cv2.GaussianBlur(layer, (0, 0), 0.8), np.float32)
     out = img * 0.92 + layer[..., None] * rng.uniform(40, 80)
     return _droplets(out.astype(np.float32), rng)
 
@@ -78,7 +78,7 @@ def _droplets(img: F32, rng: np.random.Generator) -> F32:
         cv2.circle(
             mask, (int(rng.uniform(0, w)), int(rng.uniform(0, h))), int(r), 1.0, -1, cv2.LINE_AA
         )
-    mask = cv2.GaussianBlur(mask, (0, 0), 2.0)[..., None]
+    mask = np.asarray(cv2.GaussianBlur(mask, (0, 0), 2.0), np.float32)[..., None]
     return (img * (1 - mask) + blurred * mask * 1.05).astype(np.float32)
 
 
@@ -90,9 +90,9 @@ def snow(img: F32, rng: np.random.Generator) -> F32:
     rs = rng.uniform(0.5, 1.0, n) ** 3 * w / 250 + 0.6
     for x, y, r in zip(xs, ys, rs, strict=True):
         cv2.circle(layer, (int(x * 4), int(y * 4)), int(r * 4), 1.0, -1, cv2.LINE_AA, 2)
-    layer = cv2.GaussianBlur(layer, (0, 0), 0.9)
+    layer = np.asarray(cv2.GaussianBlur(layer, (0, 0), 0.9), np.float32)
     a = np.clip(layer * rng.uniform(0.6, 0.95), 0, 1)[..., None]
-    return (img * (1 - a) + 235.0 * a).astype(np.float32)
+    return np.asarray(img * (1 - a) + 235.0 * a, dtype=np.float32)
 
 
 def snow_cover(cv: Canvas, rng: np.random.Generator) -> None:
@@ -133,9 +133,9 @@ def camera(img: F32, cond: str, rng: np.random.Generator) -> U8:
         k = int(rng.integers(3, 10))
         ker = np.zeros((k, k), np.float32)
         ker[k // 2, :] = 1.0 / k
-        img = cv2.filter2D(img, -1, ker)
+        img = np.asarray(cv2.filter2D(img, -1, ker), np.float32)
     elif rng.random() < 0.5:
-        img = cv2.GaussianBlur(img, (0, 0), rng.uniform(0.4, 1.0))
+        img = np.asarray(cv2.GaussianBlur(img, (0, 0), rng.uniform(0.4, 1.0)), np.float32)
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
     rr = ((xx - w / 2) / (w / 2)) ** 2 + ((yy - h / 2) / (h / 2)) ** 2
     img = img * (1.0 - rng.uniform(0.05, 0.35) * rr / 2)[..., None]

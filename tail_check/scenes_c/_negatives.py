@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ._canvas import Cam, Canvas, Colour, circle3, jitter, shade
+from ._canvas import Cam, Canvas, Colour, jitter, shade
 from ._cars import Car
 
 RED: Colour = (35.0, 32.0, 195.0)
@@ -210,7 +210,3 @@ def place_negative(
         hand_wheel(cv, cam, car, rng)
     elif kind == "red_barrier":
         barrier(cv, cam, car, rng)
-
-
-def _unused() -> list[tuple[float, float, float]]:
-    return circle3(0, 0, 1, 1)
