@@ -1,7 +1,9 @@
 """Labelled scenes for training and evaluating the tail check, from both generators.
 
 Generator A is :mod:`tail_check.synth`, generator B :mod:`tail_check.scenes_b`
-(written independently). Seeds are split into named ranges so that training,
+(written independently), generator C :mod:`tail_check.scenes_c` (written later by a
+third author who read neither; evaluation only: no verifier is trained, no threshold
+chosen, no stage tuned on it). Seeds are split into named ranges so that training,
 validation and held-out evaluation never share a scene. Generator A's ``train`` and
 ``validation`` scenes come from its domain-randomised mode (:mod:`tail_check.synth_wide`:
 every paint, size, turn and light widened, lamps and lettering among the hard
@@ -31,6 +33,7 @@ from numpy.typing import NDArray
 
 from . import synth
 from .scenes_b import render_scene
+from .scenes_c import render_scene as render_scene_c
 from .synth_wide import random_wide_snapshot
 
 __all__ = [
@@ -42,8 +45,10 @@ __all__ = [
     "scenes",
 ]
 
-Generator = Literal["A", "B"]
-GENERATORS: tuple[Generator, ...] = ("A", "B")
+Generator = Literal["A", "B", "C"]
+GENERATORS: tuple[Generator, ...] = ("A", "B", "C")
+TRAINABLE: tuple[Generator, ...] = ("A", "B")
+"""Generators a verifier may be trained or calibrated on; C is kept for evaluation."""
 SPLITS: dict[str, int] = {
     "train": 100_000,
     "validation": 200_000,
@@ -53,7 +58,12 @@ SPLITS: dict[str, int] = {
 """First seed of each split; scene ``i`` of a split uses seed ``first + i``."""
 WIDE_SPLITS = frozenset({"train", "validation", "heldout_wide"})
 """Splits whose generator-A scenes come from the domain-randomised mode."""
-CACHE_TAGS: dict[tuple[str, bool], str] = {("A", False): "A", ("A", True): "Aw3", ("B", False): "B"}
+CACHE_TAGS: dict[tuple[str, bool], str] = {
+    ("A", False): "A",
+    ("A", True): "Aw3",
+    ("B", False): "B",
+    ("C", False): "C1",
+}
 """Cache file prefix per (generator, randomised); a new tag whenever a generator's scenes
 change, so a cache written by an older version is never read as the new one."""
 SIZES_A: tuple[tuple[int, int], ...] = ((640, 480), (800, 600), (1024, 768), (1280, 720))
@@ -111,6 +121,16 @@ def _scene_b(seed: int) -> Sample:
     return Sample(scene.image, scene.disc, scene.condition, kind, "B", str(seed), scene.bbox)
 
 
+def _scene_c(seed: int) -> Sample:
+    # Generator C's own sizes (640x480 to 1920x1080): it renders fast enough.
+    scene = render_scene_c(seed)
+    kind = "disc" if scene.disc else str(scene.negative_kind)
+    return Sample(scene.image, scene.disc, scene.condition, kind, "C", str(seed), scene.bbox)
+
+
+_RENDER_PLAIN = {"B": _scene_b, "C": _scene_c}
+
+
 def _cache_dir() -> Path | None:
     text = os.environ.get("DEPOT_TAIL_CACHE", "")
     return Path(text) if text else None
@@ -120,7 +140,7 @@ def _cached(generator: Generator, seed: int, wide: bool = False) -> Sample:
     wide = wide and generator == "A"
 
     def render(seed: int) -> Sample:
-        return _scene_a(seed, wide) if generator == "A" else _scene_b(seed)
+        return _scene_a(seed, wide) if generator == "A" else _RENDER_PLAIN[generator](seed)
 
     cache = _cache_dir()
     if cache is None:

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..dataset import Generator, Sample, real_photos, scenes
+from ..dataset import TRAINABLE, Generator, Sample, real_photos, scenes
 from ..profile import CameraProfile
 from .candidates import Candidate, find_candidates
 from .verdict import calibrate
@@ -120,6 +120,11 @@ def train(
     """Train and calibrate a verifier on the given generators' training seeds."""
     from . import PIPELINE_PROFILE
 
+    if not generators or any(g not in TRAINABLE for g in generators):
+        raise ValueError(
+            f"a verifier is trained on generators {TRAINABLE} only, got {generators}: "
+            "generator C is kept for evaluation"
+        )
     t0 = time.perf_counter()
     parts = [
         collect(scenes(g, "train", params.train_count), PIPELINE_PROFILE, params)

@@ -50,6 +50,10 @@ HAND_TUNED_FALSE_PRESENTS = [
     ("B", "heldout", 30084, "signal_light"),
     ("A", "heldout_wide", 30108, "tail_lamp"),
     ("A", "heldout_wide", 30168, "road_tail_lights"),
+    # A lit lamp on a red car in snow (the scene's first distractor is a red square);
+    # the verifier trained on both generators believed it (0.79), the one trained on A not
+    # (0.21), so every verifier must believe a region.
+    ("A", "heldout_wide", 20037, "red_square"),
 ]
 
 
@@ -63,7 +67,7 @@ def test_a_lamp_or_wheel_the_hand_tuned_detector_calls_a_disc_is_held_uncertain(
     assert hand.verdict == "present"  # the error the check exists for
     checked = confirm(sample.image, hand)
     assert checked.verdict == "uncertain"
-    assert "learned verifier doubts it" in checked.reasons[0]
+    assert "learned verifiers doubt it" in checked.reasons[0]
     assert "a person must look" in checked.reasons[0]
     assert checked.reasons[1:] == hand.reasons and checked.bbox == hand.bbox
     # the service's path (reduced JPEG decode) gives the same answer
@@ -102,9 +106,10 @@ def test_the_box_is_scaled_to_the_image_the_result_is_confirmed_on() -> None:
     assert confirm(half, hand).verdict == "present"  # hand's box is in full-size pixels
 
 
-MEASURED_KEPT = 77 / 84
+MEASURED_KEPT = 75 / 84
 """Of the hand-tuned detector's ``present`` on true discs of generator A's tuning seeds
-330000-330199 (reference mode), the share the verifier confirms (measured)."""
+330000-330199 (reference mode), the share every verifier confirms (measured; 77 of 84
+when the one trained on both generators alone was asked)."""
 
 
 def test_most_true_discs_stay_present() -> None:
@@ -133,7 +138,7 @@ def _confirmed_on_every_candidate(
     x0, y0, x1, y1 = x - w * grow, y - h * grow, x + w + w * grow, y + h + h * grow
     where = (int(x0), int(y0), int(x1 - x0) + 1, int(y1 - y0) + 1)
     candidates, _ = find_candidates(image, PIPELINE_PROFILE, where=where)
-    return confirm_with(candidates, 1.0, hand, load_model("AB"))
+    return confirm_with(candidates, 1.0, hand, [load_model(m) for m in CONFIRM_PARAMS.models])
 
 
 def test_confirming_stops_describing_once_the_verifier_believes_a_candidate(
