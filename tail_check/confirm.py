@@ -129,6 +129,11 @@ def confirm(
     return confirm_with(candidates, scale, result, models, params)
 
 
+def _trained_on(model: TreeModel) -> str:
+    """The generators a verifier was trained on, as its shipped name (``AB``, ``A``...)."""
+    return "".join(str(g) for g in model.meta.get("trained_on", ())) or "model"
+
+
 def confirm_with(
     candidates: Iterable[Candidate],
     scale: float,
@@ -160,9 +165,12 @@ def confirm_with(
             return result
         if (probs / needed).min() > (closest / needed).min():
             closest = probs
-    said = ", ".join(f"{p:.2f} (needs {t:.2f})" for p, t in zip(closest, needed, strict=True))
+    said = ", ".join(
+        f"{_trained_on(m)} {p:.2f} of {t:.2f}"
+        for m, p, t in zip(models, closest, needed, strict=True)
+    )
     reason = (
-        f"disc-shaped, but the learned verifiers doubt it (disc probability {said}); "
-        "a person must look"
+        "disc-shaped, but the learned verifiers doubt it (disc probability by training "
+        f"set, of the one needed: {said}); a person must look"
     )
     return replace(result, verdict="uncertain", reasons=(reason, *result.reasons))

@@ -69,6 +69,7 @@ def test_a_lamp_or_wheel_the_hand_tuned_detector_calls_a_disc_is_held_uncertain(
     assert checked.verdict == "uncertain"
     assert "learned verifiers doubt it" in checked.reasons[0]
     assert "a person must look" in checked.reasons[0]
+    assert all(f"{name} 0." in checked.reasons[0] for name in CONFIRM_PARAMS.models)
     assert checked.reasons[1:] == hand.reasons and checked.bbox == hand.bbox
     # the service's path (reduced JPEG decode) gives the same answer
     assert detect_snapshot(_jpeg(sample.image)).verdict == "uncertain"
