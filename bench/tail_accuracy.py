@@ -135,15 +135,10 @@ def _report(
             both = _tally(held[g], variant, "AB")
             print("\n".join(both.lines(f"{variant}: generator {g}, trained on AB")))
     # Generator C: no model was trained or tuned on it, so every figure is cross-generator.
-    for name in (
-        (*models, SERVICE)
-        if "C" in held and variant == "confirmed"
-        else models
-        if "C" in held
-        else ()
-    ):
-        c = _tally(held["C"], variant, name)
-        print("\n".join(c.lines(f"{variant}: generator C, CROSS (trained on {name})")))
+    if "C" in held:
+        for name in (*models, SERVICE) if variant == "confirmed" else models:
+            c = _tally(held["C"], variant, name)
+            print("\n".join(c.lines(f"{variant}: generator C, CROSS (trained on {name})")))
     for name in models:
         for part, ps in photos.items():
             real = _tally(ps, variant, name)

@@ -1,4 +1,4 @@
-"""Labelled scenes for training and evaluating the tail check, from both generators.
+"""Labelled scenes for training and evaluating the tail check, from three generators.
 
 Generator A is :mod:`tail_check.synth`, generator B :mod:`tail_check.scenes_b`
 (written independently), generator C :mod:`tail_check.scenes_c` (written later by a
