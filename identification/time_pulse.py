@@ -22,6 +22,10 @@ import numpy.typing as npt
 
 from identification.rules import RULES, IdentificationRules, agreed_number
 
+MAX_QUERY_CYCLES = 2**53
+"""Most query cycles a passage may span: cycle numbers are counted in float64 first,
+which holds whole numbers exactly up to here (a real reader's passage spans thousands)."""
+
 __all__ = [
     "Detection",
     "ReaderPlan",
@@ -210,12 +214,15 @@ def decode_passage(
     Raises
     ------
     ValueError
-        If ``query_period_us`` <= 0 or ``reflection_window_us`` < 0.
+        If ``query_period_us`` is not a finite number > 0 or ``reflection_window_us`` < 0.
+        (Pulses spanning more than :data:`MAX_QUERY_CYCLES` query periods give no car
+        number, with the reason.)
     """
     period, blank = float(query_period_us), float(reflection_window_us)
-    if not period > 0 or not blank >= 0:
+    if not (math.isfinite(period) and period > 0) or not blank >= 0:
         raise ValueError(
-            f"query_period_us must be > 0 and reflection_window_us >= 0, got {period}, {blank}"
+            "query_period_us must be finite and > 0 and reflection_window_us >= 0, "
+            f"got {period}, {blank}"
         )
     if not blank < period:
         return TimePulseDecode(None, [], "the blanking window is not shorter than the query period")
@@ -226,6 +233,14 @@ def decode_passage(
     else:
         t = np.asarray(reply_times_us, dtype=np.float64).reshape(-1)
     t = t[np.isfinite(t) & (t >= 0)]
+    if t.size and float(t.max()) >= MAX_QUERY_CYCLES * period:
+        # Like a blanking window as long as the period: the event is well-formed, its
+        # numbers cannot come from one reader's passage, so no car number (not an error).
+        reason = (
+            f"the query period ({period} µs) is too short for pulses up to {float(t.max())} "
+            f"µs: the passage would span more than {MAX_QUERY_CYCLES} query cycles"
+        )
+        return TimePulseDecode(None, [], reason)
     tol = 0.05 * (period - blank) if reply_tolerance_us is None else float(reply_tolerance_us)
     rep = _replies(t, period, blank, query_times_us, tol)
     reads = pair_reads(rep.cycles.tolist())

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from statistics import NormalDist
 
 import numpy as np
@@ -124,6 +125,25 @@ def test_no_majority_and_single_read_give_none() -> None:
 def test_bad_period_raises() -> None:
     with pytest.raises(ValueError, match="query_period_us"):
         decode_passage([1.0], query_period_us=0, reflection_window_us=0)
+
+
+def test_an_infinite_period_is_refused() -> None:
+    with pytest.raises(ValueError, match="query_period_us must be finite"):
+        decode_passage([1.0], query_period_us=math.inf, reflection_window_us=0)
+
+
+@pytest.mark.parametrize("period", [5e-324, 1e-300, 1e-9])
+def test_a_period_too_short_for_the_passage_gives_no_number_not_overflowing_cycles(
+    period: float,
+) -> None:
+    """Pulses that would span more query cycles than a count holds (found by the decoder
+    fuzzing: it warned 'invalid value encountered in cast' and went on with garbage
+    cycles) give no car number and say why, without a warning."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = decode_passage([1.0, 2e8], query_period_us=period, reflection_window_us=0)
+    assert result.car_number is None and result.reads == []
+    assert "query period" in result.reason and "too short" in result.reason
 
 
 # ----------------------------------------------------------------------------- accuracy
