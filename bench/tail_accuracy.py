@@ -94,11 +94,12 @@ def _seen(samples: list[Sample]) -> list[Seen]:
 def _tally(seen: list[Seen], variant: str, model: str | None) -> Tally:
     out = Tally()
     params = VerdictParams(combine=variant)  # type: ignore[arg-type]
+    # ``A+B``: every one of these models must confirm (the service's rule).
+    models = [load_model(m) for m in model.split("+")] if model is not None else []
     for item in seen:
         if model is None:
             verdict = item.hand.verdict
         elif variant == "confirmed":
-            models = [load_model(m) for m in model.split("+")]
             verdict = confirm_with(item.candidates, 1.0, item.hand, models).verdict
         else:
             verdict = judge(item.candidates, load_model(model), params, item.hand.verdict)[0]

@@ -45,56 +45,67 @@ def channel_extreme(image: NDArray[np.uint8], op: Any) -> NDArray[np.uint8]:
     return np.asarray(op(op(b, g), r), dtype=np.uint8)
 
 
+def _histogram(values: NDArray[np.uint8]) -> NDArray[np.float32]:
+    """Counts of the 256 levels of a uint8 array (OpenCV: one pass, no sort)."""
+    counts = cv2.calcHist([np.ascontiguousarray(values)], [0], None, [256], [0, 256])
+    return np.asarray(counts, np.float32).ravel()
+
+
+def _cumulative(values: NDArray[np.uint8]) -> NDArray[np.int64]:
+    """Running count of values at or below each level; its last entry is their number."""
+    return np.cumsum(_histogram(values).astype(np.int64))
+
+
+def _order_statistic(cum: NDArray[np.int64], k: int) -> int:
+    """The ``k``-th smallest value (0-based) of the values counted by ``cum``."""
+    return int(np.searchsorted(cum, k, side="right"))
+
+
+def _interpolated(values: NDArray[np.uint8], fraction: float, number: Any) -> float:
+    """numpy's default (linear) quantile at ``fraction`` of the values, with the two order
+    statistics and the interpolation carried in ``number`` (``float``: numpy on the uint8
+    array; ``np.float32``: numpy on the values as float32)."""
+    cum = _cumulative(values)
+    n = int(cum[-1])
+    position = (n - 1) * fraction
+    lo = min(math.floor(position), n - 1)
+    gamma = position - lo
+    below = number(_order_statistic(cum, lo))
+    above = number(_order_statistic(cum, min(lo + 1, n - 1)))
+    step = above - below
+    # numpy's lerp: from the nearer end, so that gamma near 1 rounds like numpy does (a
+    # Python float keeps a numpy type's precision).
+    return float(below + step * gamma if gamma < 0.5 else above - step * (1 - gamma))
+
+
 def percentile_u8(values: NDArray[np.uint8], q: float) -> float:
     """``np.percentile(values, q)`` (its default linear method, bit for bit) of a uint8
     array, from a 256-bin histogram instead of a partition of all its values."""
-    counts = cv2.calcHist([np.ascontiguousarray(values)], [0], None, [256], [0, 256])
-    cum = np.cumsum(counts.ravel().astype(np.int64))
-    n = int(cum[-1])
-    position = (n - 1) * (q / 100)
-    lo = min(math.floor(position), n - 1)
-    gamma = position - lo
-    below = int(np.searchsorted(cum, lo, side="right"))
-    above = int(np.searchsorted(cum, min(lo + 1, n - 1), side="right"))
-    step = above - below
-    # numpy's lerp: from the nearer end, so that gamma near 1 rounds like numpy does.
-    return float(below + step * gamma) if gamma < 0.5 else float(above - step * (1 - gamma))
+    return _interpolated(values, q / 100, float)
 
 
 def quantile_f32_u8(values: NDArray[np.uint8], q: float) -> float:
     """``np.quantile(values.astype(np.float32), q)`` bit for bit (numpy interpolates
     between the two order statistics in float32), from a 256-bin histogram."""
-    counts = cv2.calcHist([np.ascontiguousarray(values)], [0], None, [256], [0, 256])
-    cum = np.cumsum(counts.ravel().astype(np.int64))
-    n = int(cum[-1])
-    position = (n - 1) * q
-    lo = min(math.floor(position), n - 1)
-    gamma = position - lo
-    below = np.float32(np.searchsorted(cum, lo, side="right"))
-    above = np.float32(np.searchsorted(cum, min(lo + 1, n - 1), side="right"))
-    step = above - below
-    # numpy's lerp, from the nearer end, in float32 (a Python float keeps numpy's dtype).
-    return float(below + step * gamma if gamma < 0.5 else above - step * (1 - gamma))
+    return _interpolated(values, q, np.float32)
 
 
 def median_u8(values: NDArray[np.uint8]) -> np.float32:
     """``np.median`` of a uint8 array's values as float32 (the median of the same values
     as float32, bit for bit: an even count gives the mean of the two middle values,
     exact in float32), from a 256-bin histogram instead of a partition."""
-    counts = cv2.calcHist([np.ascontiguousarray(values)], [0], None, [256], [0, 256])
-    cum = np.cumsum(counts.ravel().astype(np.int64))
+    cum = _cumulative(values)
     n = int(cum[-1])
-    upper = np.float32(np.searchsorted(cum, n // 2, side="right"))
+    upper = np.float32(_order_statistic(cum, n // 2))
     if n % 2:
         return upper
-    lower = np.float32(np.searchsorted(cum, n // 2 - 1, side="right"))
+    lower = np.float32(_order_statistic(cum, n // 2 - 1))
     return np.float32((lower + upper) / np.float32(2))
 
 
 def std_u8(values: NDArray[np.uint8]) -> float:
     """Standard deviation (``values.std()``) of a uint8 array from its 256-bin histogram."""
-    counts = cv2.calcHist([np.ascontiguousarray(values)], [0], None, [256], [0, 256]).ravel()
-    counts = counts.astype(np.float64)
+    counts = _histogram(values).astype(np.float64)
     n = float(counts.sum())
     mean = float(counts @ _LEVELS) / n
     return math.sqrt(float(counts @ (_LEVELS - mean) ** 2) / n)
