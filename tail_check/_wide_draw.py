@@ -20,7 +20,15 @@ from numpy.typing import NDArray
 
 from ._scene import CarGeometry, FloatImage
 
-__all__ = ["WIDE", "WideRanges", "car_paint", "draw_lettering", "red_paint", "snow_clump"]
+__all__ = [
+    "WIDE",
+    "WideRanges",
+    "car_paint",
+    "draw_lettering",
+    "draw_roundel",
+    "red_paint",
+    "snow_clump",
+]
 
 Range = tuple[float, float]
 Paint = tuple[float, float, float]
@@ -61,6 +69,14 @@ class WideRanges:
         goes from red towards white.
     letter_height : red lettering height, fraction of the image height ...
     letter_body : ... and at most this fraction of the body height.
+    roundel_radius : a round red logo (a roundel with white letters) has this many
+        disc radii (:attr:`disc_radius`): the closed red bowl of a disc's own size ...
+    roundel_letters : ... and letters this fraction of its diameter high.
+    roundel_share : share of scenes with such a roundel. 0 by default: with one in 14
+        of the training scenes the retrained verifiers doubted plain discs (a clean
+        disc of radius 2 % of 1080 px held ``uncertain``; ``AB`` reached its ``present``
+        threshold on none of its validation discs), because the features see a disc
+        at the working scale, where white letters blur into a reflector.
     jpeg : JPEG quality range (inclusive).
     """
 
@@ -99,12 +115,16 @@ class WideRanges:
     glow_white: Range = (0.1, 0.85)
     letter_height: Range = (0.05, 0.11)
     letter_body: float = 0.35
+    roundel_radius: Range = (0.8, 1.8)
+    roundel_letters: Range = (0.3, 0.6)
+    roundel_share: float = 0.0
     jpeg: tuple[int, int] = (50, 95)
 
 
 WIDE = WideRanges()
 LETTERS = "DPOBR8096QA"
 """Letters and digits with closed bowls (the issue's false `present`: D, P, O, Р)."""
+_WHITE: Paint = (0.9, 0.9, 0.88)
 FONTS = (cv2.FONT_HERSHEY_SIMPLEX, cv2.FONT_HERSHEY_DUPLEX, cv2.FONT_HERSHEY_TRIPLEX)
 
 
@@ -242,6 +262,38 @@ def draw_lettering(
     alpha = (ink.astype(np.float32) / 255.0)[..., None]
     paint = np.asarray(red_paint(rng, c), np.float32)
     img[:] = img * (1 - alpha) + alpha * paint
+
+
+def draw_roundel(
+    rng: np.random.Generator, img: FloatImage, geo: CarGeometry, c: WideRanges = WIDE
+) -> None:
+    """A round red logo with white letters on the body, in any red a disc could have.
+
+    A red disc of a tail disc's size, its centre broken only by thin white strokes: the
+    kind of logo a verifier that learnt only plates and lettering calls a disc. It sits
+    anywhere on the end wall above the disc's own zone (logos are painted mid-body).
+    """
+    body = geo.beam_top - geo.top
+    r = max(3.0, geo.width * rng.uniform(*c.disc_radius) * rng.uniform(*c.roundel_radius))
+    r = min(r, body * 0.4)
+    cx = geo.left + r + max(1.0, geo.width - 2 * r) * rng.uniform(0.0, 1.0)
+    cy = geo.top + r + max(1.0, body * 0.8 - 2 * r) * rng.uniform(0.0, 1.0)
+    centre = (int(cx), int(cy))
+    cv2.circle(img, centre, int(r), red_paint(rng, c), -1, cv2.LINE_AA)
+    if rng.random() < 0.5:  # a white ring round the lettering, as many roundels have
+        cv2.circle(img, centre, int(r * 0.8), _WHITE, max(1, int(r * 0.06)), cv2.LINE_AA)
+    font = FONTS[int(rng.integers(len(FONTS)))]
+    height = max(3, int(2 * r * rng.uniform(*c.roundel_letters)))
+    scale = cv2.getFontScaleFromHeight(font, height, 1)
+    thick = max(1, int(height * rng.uniform(0.1, 0.2)))
+    text = "".join(rng.choice(list(LETTERS), int(rng.integers(1, 4))))
+    (tw, th), _ = cv2.getTextSize(text, font, scale, thick)
+    scale *= min(1.0, 1.4 * r / max(1, tw))  # the letters stay inside the roundel
+    (tw, th), _ = cv2.getTextSize(text, font, scale, thick)
+    ink = np.zeros(img.shape[:2], np.uint8)  # OpenCV writes text on 8-bit images only
+    cv2.putText(ink, text, (int(cx - tw / 2), int(cy + th / 2)), font, scale, 255, thick)
+    alpha = (ink.astype(np.float32) / 255.0)[..., None]
+    img[:] = img * (1 - alpha) + alpha * np.asarray(_WHITE, np.float32)
 
 
 def draw_barrier(

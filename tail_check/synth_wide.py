@@ -6,7 +6,8 @@ the same kind of last-car scene with every quantity the issue names as a failure
 widened (:class:`~tail_check._wide_draw.WideRanges`): body and disc paints across the
 reds, faded pink discs, discs turned edge-on, far cameras (small discs), darker dusk,
 white balance and exposure errors, poles and snow on the disc, red lettering with
-closed bowls and red/white barriers among the hard negatives, and lit reflectors from
+closed bowls and red/white barriers (round red logos with white letters on request:
+``WideRanges.roundel_share``) among the hard negatives, and lit reflectors from
 deep red to white glare. A verifier trained on these scenes should not depend on one
 paint, one size or one light.
 """
@@ -26,6 +27,7 @@ from ._wide_draw import (
     draw_barrier,
     draw_disc_wide,
     draw_lettering,
+    draw_roundel,
     red_paint,
     snow_clump,
 )
@@ -50,6 +52,8 @@ def _distract(
         return draw_lamp(rng, img, geo, kind)
     if kind == "red_lettering":
         draw_lettering(rng, img, geo)
+    elif kind == "red_roundel":
+        draw_roundel(rng, img, geo)
     elif kind == "red_barrier":
         draw_barrier(rng, img, geo)
     else:
@@ -88,6 +92,10 @@ def random_wide_snapshot(
         kinds = kinds if lamp in kinds else (*kinds, lamp)
     img = background(rng, h, w, _SKY[condition])
     geo = draw_car(rng, img, paint, width=c.car_width)
+    # Checked before drawing so that with no roundels (the default) the random stream,
+    # and so every scene the shipped verifiers were trained on, stays the same.
+    if c.roundel_share > 0 and rng.random() < c.roundel_share:
+        kinds = (*kinds, "red_roundel")
     lit = [e for kind in kinds for e in _distract(rng, img, geo, kind)]
     mask = np.zeros((h, w), bool)
     drawn = draw_disc_wide(rng, img, geo, c) if disc else None

@@ -4,6 +4,7 @@ issue 11 lists as failures."""
 from __future__ import annotations
 
 import colorsys
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -113,3 +114,36 @@ def test_a_tail_lamp_is_smaller_than_the_smallest_disc() -> None:
     from tail_check._wide_lamps import LAMPS
 
     assert LAMPS.lamp_radius[1] < WIDE.disc_radius[0]
+
+
+def test_a_roundel_is_a_disc_sized_red_circle_with_white_letters_mid_body() -> None:
+    """The round red logo with white letters that generator C's scenes showed the
+    verifiers had never learnt (C:370239, called a disc by all three)."""
+    from tail_check._wide_draw import WIDE, draw_roundel
+
+    geo = CarGeometry(120, 520, 100, 360, 395)
+    for i in range(20):
+        img = np.full((480, 640, 3), 0.35, np.float32)
+        draw_roundel(np.random.default_rng([5, i]), img, geo)
+        red = (img[..., 0] - np.maximum(img[..., 1], img[..., 2])) > 0.1
+        white = img.min(axis=2) > 0.6
+        ys, xs = np.nonzero(red | white)
+        assert ys.size, "nothing drawn"
+        # on the end wall, above the buffer beam (where logos are painted)
+        assert xs.min() >= geo.left and xs.max() <= geo.right and ys.max() < geo.beam_top
+        w, h = xs.max() - xs.min() + 1, ys.max() - ys.min() + 1
+        assert abs(w - h) <= 2  # round
+        radius = w / 2 / geo.width
+        assert 0.8 * WIDE.disc_radius[0] <= radius <= 1.8 * WIDE.disc_radius[1] + 0.01
+        assert white.sum() > 0.03 * red.sum()  # letters break the red bowl
+
+
+def test_roundels_are_drawn_only_when_asked_for() -> None:
+    from tail_check._wide_draw import WIDE
+
+    asked = replace(WIDE, roundel_share=1.0)
+    for i in range(5):
+        _, plain = random_wide_snapshot(np.random.default_rng([9, i]))
+        _, lab = random_wide_snapshot(np.random.default_rng([9, i]), c=asked)
+        assert "red_roundel" not in plain.distractors
+        assert "red_roundel" in lab.distractors
