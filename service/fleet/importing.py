@@ -34,7 +34,7 @@ from sqlalchemy.orm import Session
 from core.database import utcnow
 from core.errors import Unprocessable
 from core.models import Car
-from ingest.schemas import EARLIEST, LATEST
+from ingest.field_types import EARLIEST, LATEST
 from service.fleet.csv_checks import DecimalCommaCheck, FirstErrors
 from service.fleet.models import Measurement, MeasurementLayout, Parameter, decode_readings
 from service.fleet.rules import ahead_problem, plausible_range, value_problems

@@ -7,7 +7,8 @@ from typing import Annotated, Literal
 from pydantic import Field
 
 from core.schemas import StrictModel
-from ingest.schemas import DeviceTime, MeasuredValues
+from ingest.field_types import DeviceTime
+from ingest.schemas import MeasuredValues
 from service.fleet.rules import RULES
 from service.reasons import Reason
 

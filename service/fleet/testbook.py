@@ -12,7 +12,7 @@ import struct
 from collections.abc import Iterable, Iterator, Mapping
 from datetime import datetime, timedelta, tzinfo
 
-from ingest.schemas import EARLIEST, LATEST
+from ingest.field_types import EARLIEST, LATEST
 
 Test = tuple[str, datetime, dict[str, float]]
 

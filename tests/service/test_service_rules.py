@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import itertools
 from datetime import UTC, datetime, timedelta
+from typing import get_args
 
 import pytest
 
 from service.clearance.rules import (
-    SECTION_STATE,
-    SWEEP_FROM,
     ConsistEvidence,
     EotEvidence,
     EotReading,
@@ -19,9 +18,7 @@ from service.clearance.rules import (
     Verdict,
     ZeroCount,
     decide,
-    departure_opens_sweep,
     next_state,
-    section_state,
     sweep_clears_original,
 )
 
@@ -245,21 +242,6 @@ def test_rule_table(name: str, evidence: RunEvidence, verdict: str, phrase: str)
     assert any(phrase in reason for reason in decision.reasons), decision.reasons
 
 
-@pytest.mark.parametrize(
-    ("verdict", "mode", "state"),
-    [
-        ("complete", "primary", "free"),
-        ("complete", "auxiliary", "awaiting_confirmation"),
-        ("undetermined", "primary", "review"),
-        ("undetermined", "auxiliary", "review"),
-        ("incomplete", "primary", "alarm"),
-        ("incomplete", "auxiliary", "alarm"),
-    ],
-)
-def test_section_state_by_mode(verdict: str, mode: str, state: str) -> None:
-    assert section_state(verdict, mode) == state  # type: ignore[arg-type]
-
-
 TAILS = [None, PRESENT, ABSENT_SURE, ABSENT_WEAK, UNCERTAIN]
 CONSISTS = [None, IDENTICAL, MISSING, UNKNOWN]
 AXLES = [(None, None), (48, 48), (48, 44), (44, 48), (48, None)]
@@ -346,39 +328,6 @@ def test_every_combination_with_eot_is_safe(eot_evidence: EotEvidence | None) ->
         assert verdict == expected, evidence
 
 
-STATES = ["free", "occupied", "awaiting_confirmation", "review", "alarm", "blocked",
-          "awaiting_sweep"]  # fmt: skip
-VERDICTS: list[Verdict] = ["complete", "incomplete", "undetermined"]
-
-
-@pytest.mark.parametrize(
-    ("current", "verdict", "mode", "state"),
-    [
-        # a sweep run holds the section as "occupied" and follows the normal table
-        ("occupied", "complete", "primary", "free"),
-        ("occupied", "complete", "auxiliary", "awaiting_confirmation"),
-        ("occupied", "incomplete", "primary", "alarm"),
-        ("occupied", "undetermined", "primary", "review"),
-        ("occupied", "undetermined", "auxiliary", "review"),
-        # awaiting a sweep: only proof of loss moves it (to alarm); doubt or proof do not free it
-        ("awaiting_sweep", "complete", "primary", "awaiting_sweep"),
-        ("awaiting_sweep", "undetermined", "primary", "awaiting_sweep"),
-        ("awaiting_sweep", "incomplete", "primary", "alarm"),
-        ("blocked", "incomplete", "primary", "blocked"),
-        ("alarm", "complete", "primary", "alarm"),
-    ],
-)
-def test_next_state_table(current: str, verdict: str, mode: str, state: str) -> None:
-    assert next_state(current, verdict, mode) == state  # type: ignore[arg-type]
-
-
-def test_sweep_is_asked_only_where_nothing_proves_the_section_empty() -> None:
-    assert {"alarm", "review", "blocked"} == SWEEP_FROM
-    assert {s for s in STATES if departure_opens_sweep(s)} == {"awaiting_sweep"}
-    assert [v for v in VERDICTS if sweep_clears_original(v)] == ["complete"]
-    assert not sweep_clears_original(None)
-
-
 @pytest.mark.parametrize("mode", ["primary", "auxiliary"])
 def test_a_sweep_run_that_is_not_complete_never_frees_the_section(mode: str) -> None:
     """Exhaustive over every evidence combination (with and without EOT) and every sequence of
@@ -394,18 +343,11 @@ def test_a_sweep_run_that_is_not_complete_never_frees_the_section(mode: str) -> 
         after = next_state("occupied", verdict, mode)  # the sweep run held the section
         assert (after == "free") == (verdict == "complete" and mode == "primary"), evidence
         assert sweep_clears_original(verdict) == (verdict == "complete")
-    assert verdicts == set(VERDICTS)
-    for sequence in itertools.product(VERDICTS, repeat=3):
+    assert verdicts == set(get_args(Verdict))
+    for sequence in itertools.product(get_args(Verdict), repeat=3):
         state = "occupied"
         for step in sequence:
             before = state
             state = next_state(state, step, mode)
             if state == "free" and before != "free":
                 assert step == "complete", sequence
-
-
-def test_awaiting_sweep_is_never_freed_by_the_swept_run_itself() -> None:
-    """Late evidence re-deciding the original run, whatever it says, never frees a section
-    that awaits its sweep train (only the sweep run or a dispatcher's clear can)."""
-    for verdict, mode in SECTION_STATE:
-        assert next_state("awaiting_sweep", verdict, mode) in ("awaiting_sweep", "alarm")  # type: ignore[arg-type]
