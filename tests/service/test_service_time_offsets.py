@@ -83,7 +83,7 @@ def test_a_value_only_the_database_refuses_rejects_its_item_alone(
     other items are stored and derived."""
     if session.get_bind().dialect.name != "postgresql":
         pytest.skip("SQLite stores any offset: the database refuses nothing here")
-    monkeypatch.setattr("ingest.schemas.EASTMOST_OFFSET", timedelta(hours=23, minutes=59))
+    monkeypatch.setattr("ingest.field_types.EASTMOST_OFFSET", timedelta(hours=23, minutes=59))
     keys = build_line(client)
     items: list[Any] = [
         event("db-dep", "train_departed", section="AB", train="2041"),

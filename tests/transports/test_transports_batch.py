@@ -211,7 +211,7 @@ def test_a_value_only_the_database_refuses_is_refused_alone(
     alone: the batch's other events are stored (they were refused with it)."""
     if not line.database_url.startswith("postgresql"):
         pytest.skip("SQLite stores any offset: the database refuses nothing here")
-    monkeypatch.setattr("ingest.schemas.EASTMOST_OFFSET", timedelta(hours=23, minutes=59))
+    monkeypatch.setattr("ingest.field_types.EASTMOST_OFFSET", timedelta(hours=23, minutes=59))
     key = _keys(line)[SENDER]
     odd = _heartbeat("bad-db-odd", occurred_at="2026-11-23T19:00:00+16:00")
     events = [json.loads(_heartbeat(f"bad-db-b{n}")) for n in (1, 3)]
