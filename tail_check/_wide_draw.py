@@ -243,6 +243,23 @@ def snow_clump(
     return mask > 0
 
 
+def _paint_text(
+    img: FloatImage,
+    text: str,
+    origin: tuple[int, int],
+    font: int,
+    scale: float,
+    thick: int,
+    paint: Paint,
+    line_type: int = cv2.LINE_8,
+) -> None:
+    """Blend ``text`` in ``paint`` into the float image (in place)."""
+    ink = np.zeros(img.shape[:2], np.uint8)  # OpenCV writes text on 8-bit images only
+    cv2.putText(ink, text, origin, font, scale, 255, thick, line_type)
+    alpha = (ink.astype(np.float32) / 255.0)[..., None]
+    img[:] = img * (1 - alpha) + alpha * np.asarray(paint, np.float32)
+
+
 def draw_lettering(
     rng: np.random.Generator, img: FloatImage, geo: CarGeometry, c: WideRanges = WIDE
 ) -> None:
@@ -257,11 +274,7 @@ def draw_lettering(
     (tw, _), _ = cv2.getTextSize(text, font, scale, thick)
     x = geo.left + int(max(1, geo.width - tw) * rng.uniform(0.0, 1.0))
     y = geo.top + int(body * rng.uniform(0.2, 0.75) + height / 2)
-    ink = np.zeros(img.shape[:2], np.uint8)  # OpenCV writes text on 8-bit images only
-    cv2.putText(ink, text, (x, y), font, scale, 255, thick, cv2.LINE_AA)
-    alpha = (ink.astype(np.float32) / 255.0)[..., None]
-    paint = np.asarray(red_paint(rng, c), np.float32)
-    img[:] = img * (1 - alpha) + alpha * paint
+    _paint_text(img, text, (x, y), font, scale, thick, red_paint(rng, c), cv2.LINE_AA)
 
 
 def draw_roundel(
@@ -290,10 +303,7 @@ def draw_roundel(
     (tw, th), _ = cv2.getTextSize(text, font, scale, thick)
     scale *= min(1.0, 1.4 * r / max(1, tw))  # the letters stay inside the roundel
     (tw, th), _ = cv2.getTextSize(text, font, scale, thick)
-    ink = np.zeros(img.shape[:2], np.uint8)  # OpenCV writes text on 8-bit images only
-    cv2.putText(ink, text, (int(cx - tw / 2), int(cy + th / 2)), font, scale, 255, thick)
-    alpha = (ink.astype(np.float32) / 255.0)[..., None]
-    img[:] = img * (1 - alpha) + alpha * np.asarray(_WHITE, np.float32)
+    _paint_text(img, text, (int(cx - tw / 2), int(cy + th / 2)), font, scale, thick, _WHITE)
 
 
 def draw_barrier(
@@ -306,5 +316,5 @@ def draw_barrier(
     seg = max(4, int(geo.width * rng.uniform(0.06, 0.14)))
     red = red_paint(rng, c)
     for k, x in enumerate(range(0, w, seg)):
-        colour = red if k % 2 == 0 else (0.9, 0.9, 0.88)
+        colour = red if k % 2 == 0 else _WHITE
         cv2.rectangle(img, (x, y), (x + seg, y + th), colour, -1)
