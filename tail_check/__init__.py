@@ -16,9 +16,11 @@ Public API::
     compare_with_departure(departure_result, departure_bgr, arrival_bgr, profile=None)
     calibrate(image_bgr, (x, y)) -> CameraProfile
     render_overlay(image_bgr, result, profile=None) -> BGR array; overlay_png(...) -> bytes
-    decode_snapshot(data) -> BGR array
+    decode_snapshot(data) -> BGR array (EXIF orientation ignored)
     detect_snapshot(jpeg_bytes, profile=None) -> DetectionResult (JPEG decoded at reduced size)
     CameraProfile, DEFAULT_PROFILE, load_profile
+    UndecodableImage: the ValueError of the two decoders for bytes that are not a whole
+        JPEG/PNG image
 """
 
 from .calibrate import calibrate
@@ -28,7 +30,7 @@ from .detect import WORK_SIDE, DetectionResult, Verdict, detect
 from .overlay import overlay_png, render_overlay
 from .profile import DEFAULT_PROFILE, CameraProfile, load_profile
 from .regions import DiscCandidate
-from .snapshot import decode_snapshot, detect_snapshot
+from .snapshot import UndecodableImage, decode_snapshot, detect_snapshot
 
 __all__ = [
     "DEFAULT_PROFILE",
@@ -38,6 +40,7 @@ __all__ = [
     "ConfirmParams",
     "DetectionResult",
     "DiscCandidate",
+    "UndecodableImage",
     "Verdict",
     "calibrate",
     "compare",

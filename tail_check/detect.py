@@ -109,24 +109,39 @@ class DetectionResult:
 def check_image(image_bgr: object) -> NDArray[np.uint8]:
     """Validate a BGR snapshot and return it as a uint8 array (no copy when possible).
 
+    Another numeric type is accepted when every value lies in 0..255 (a float image of
+    8-bit values); anything else (a 16-bit image, floats scaled to 0..1 aside) is refused,
+    never clipped: 60000 of a uint16 image would silently have become a white 255.
+
     Raises
     ------
     ValueError
-        If it is not an (H, W, 3) image of at least 16×16 pixels.
+        If it is not an (H, W, 3) image of at least 16×16 pixels with values 0..255.
     """
     if not isinstance(image_bgr, np.ndarray):
         raise ValueError(f"image must be a numpy array (BGR), got {type(image_bgr).__name__}")
     if image_bgr.ndim != 3 or image_bgr.shape[2] != 3:
         raise ValueError(f"image must have shape (H, W, 3) in BGR order, got {image_bgr.shape}")
-    if image_bgr.shape[0] < 16 or image_bgr.shape[1] < 16:
-        raise ValueError(
-            f"image is too small ({image_bgr.shape[1]}x{image_bgr.shape[0]}), need 16x16"
-        )
+    height, width = image_bgr.shape[:2]
+    if height < 16 or width < 16:
+        size = f"({width}x{height})"
+        if height >= 16:
+            raise ValueError(f"image is too narrow {size}, need at least 16 pixels across")
+        if width >= 16:
+            raise ValueError(f"image is too short {size}, need at least 16 pixels high")
+        raise ValueError(f"image is too small {size}, need at least 16x16")
     if image_bgr.dtype == np.uint8:
         return image_bgr
-    if not np.issubdtype(image_bgr.dtype, np.number) or not np.all(np.isfinite(image_bgr)):
+    real = np.issubdtype(image_bgr.dtype, np.integer) or np.issubdtype(image_bgr.dtype, np.floating)
+    if not real or not np.all(np.isfinite(image_bgr)):
         raise ValueError("image must hold finite numbers 0..255")
-    return np.clip(image_bgr, 0, 255).astype(np.uint8)
+    low, high = float(image_bgr.min()), float(image_bgr.max())
+    if low < 0 or high > 255:
+        raise ValueError(
+            f"image must hold 8-bit values 0..255 (BGR uint8), got {image_bgr.dtype} values"
+            f" from {low:g} to {high:g}; convert it to uint8 first"
+        )
+    return np.asarray(image_bgr, dtype=np.uint8)
 
 
 def region_box(profile: CameraProfile, width: int, height: int) -> BBox:

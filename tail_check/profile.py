@@ -27,6 +27,25 @@ def _check_range(name: str, lo: float, hi: float, *, low: float, high: float) ->
         )
 
 
+def _shown(value: Any) -> str:
+    """``value`` as JSON spells it (``true``, ``null``, ``"0.25"``), for a message."""
+    try:
+        return json.dumps(value)
+    except (TypeError, ValueError):
+        return repr(value)
+
+
+def _number(value: Any) -> float | None:
+    """A JSON number as a float; None for anything else. ``float()`` took ``true`` for 1.0
+    and the string ``"0.25"`` for 0.25, and a string of three digits for three numbers."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    try:
+        return float(value)
+    except OverflowError:  # an integer beyond any float: refused as not a usable number
+        return None
+
+
 @dataclass(frozen=True)
 class CameraProfile:
     """Per-camera settings of the tail-disc detector.
@@ -143,9 +162,9 @@ class CameraProfile:
             raise ValueError("a camera profile must be a JSON object")
         data = dict(data)
         fmt = data.pop("format", PROFILE_FORMAT)
-        if fmt != PROFILE_FORMAT:
+        if isinstance(fmt, bool) or fmt != PROFILE_FORMAT:  # true == 1 in Python
             raise ValueError(
-                f"unsupported camera profile format {fmt!r} (expected {PROFILE_FORMAT})"
+                f"unsupported camera profile format {_shown(fmt)} (expected {PROFILE_FORMAT})"
             )
         known = {f.name: f for f in fields(cls)}
         unknown = sorted(set(data) - set(known))
@@ -154,19 +173,24 @@ class CameraProfile:
         kwargs: dict[str, Any] = {}
         for key, value in data.items():
             default = getattr(DEFAULT_PROFILE, key)
-            try:
-                if isinstance(default, tuple):
-                    kwargs[key] = tuple(float(v) for v in value)
-                    if len(kwargs[key]) != len(default):
-                        raise ValueError
-                elif isinstance(default, str):
-                    kwargs[key] = str(value)
-                else:
-                    kwargs[key] = float(value)
-            except (TypeError, ValueError):
-                raise ValueError(
-                    f"camera profile field {key!r} has an invalid value {value!r}"
-                ) from None
+            if isinstance(default, tuple):
+                listed = isinstance(value, list | tuple) and len(value) == len(default)
+                numbers = [_number(v) for v in value] if listed else [None]
+                if None in numbers:
+                    raise ValueError(
+                        f"profile field {key!r} must be a list of {len(default)} numbers,"
+                        f" got {_shown(value)}"
+                    )
+                kwargs[key] = tuple(numbers)
+            elif isinstance(default, str):
+                if not isinstance(value, str):
+                    raise ValueError(f"profile field {key!r} must be a string, got {_shown(value)}")
+                kwargs[key] = value
+            else:
+                number = _number(value)
+                if number is None:
+                    raise ValueError(f"profile field {key!r} must be a number, got {_shown(value)}")
+                kwargs[key] = number
         return replace(DEFAULT_PROFILE, **kwargs)
 
     @classmethod
@@ -190,10 +214,12 @@ def load_profile(path: str | Path) -> CameraProfile:
     Raises
     ------
     ValueError
-        If the file cannot be read or holds an invalid profile.
+        If the file cannot be read, is not UTF-8 text or holds an invalid profile.
     """
     try:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise ValueError(f"cannot read camera profile {str(path)!r}: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"profile {str(path)!r} is not UTF-8 JSON text") from None
     return CameraProfile.from_json(text)

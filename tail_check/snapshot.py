@@ -23,20 +23,27 @@ from .profile import CameraProfile
 __all__ = [
     "DEFAULT_REDUCED_DECODE",
     "ReducedDecode",
+    "UndecodableImage",
     "decode_snapshot",
     "detect_snapshot",
     "jpeg_size",
     "reduction_for",
 ]
 
+# EXIF orientation is ignored everywhere: the service judges (and a profile is calibrated
+# on) the pixels as stored, as its own decoder (PIL) does.
 _REDUCED = {
-    1: cv2.IMREAD_COLOR,
-    2: cv2.IMREAD_REDUCED_COLOR_2,
-    4: cv2.IMREAD_REDUCED_COLOR_4,
-    8: cv2.IMREAD_REDUCED_COLOR_8,
+    1: cv2.IMREAD_COLOR | cv2.IMREAD_IGNORE_ORIENTATION,
+    2: cv2.IMREAD_REDUCED_COLOR_2 | cv2.IMREAD_IGNORE_ORIENTATION,
+    4: cv2.IMREAD_REDUCED_COLOR_4 | cv2.IMREAD_IGNORE_ORIENTATION,
+    8: cv2.IMREAD_REDUCED_COLOR_8 | cv2.IMREAD_IGNORE_ORIENTATION,
 }
 # Start-of-frame markers (baseline, extended, progressive, lossless; not DHT, JPG, DAC).
 _SOF = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
+
+
+class UndecodableImage(ValueError):
+    """The bytes are not a whole JPEG or PNG image (empty, truncated, another format)."""
 
 
 @dataclass(frozen=True)
@@ -61,7 +68,8 @@ DEFAULT_REDUCED_DECODE = ReducedDecode()
 
 
 def decode_snapshot(data: bytes, *, reduce: int = 1) -> NDArray[np.uint8]:
-    """Decode JPEG/PNG bytes to a BGR array.
+    """Decode JPEG/PNG bytes to a BGR array (EXIF orientation ignored, as
+    :func:`detect_snapshot` and the service's decoder do).
 
     Parameters
     ----------
@@ -73,16 +81,18 @@ def decode_snapshot(data: bytes, *, reduce: int = 1) -> NDArray[np.uint8]:
 
     Raises
     ------
+    UndecodableImage
+        If the bytes are not a decodable image.
     ValueError
-        If the bytes are not a decodable image or ``reduce`` is not 1, 2, 4 or 8.
+        If ``reduce`` is not 1, 2, 4 or 8.
     """
     if reduce not in _REDUCED:
         raise ValueError(f"reduce must be 1, 2, 4 or 8, got {reduce}")
     if not data:
-        raise ValueError("empty image data")
+        raise UndecodableImage("empty image data")
     image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), _REDUCED[reduce])
     if image is None:
-        raise ValueError("image data is not a decodable JPEG or PNG")
+        raise UndecodableImage("image data is not a decodable JPEG or PNG")
     return np.asarray(image, dtype=np.uint8)
 
 
@@ -143,23 +153,25 @@ def detect_snapshot(
 
     Raises
     ------
+    UndecodableImage
+        If the bytes are not a decodable image (empty, truncated, not JPEG or PNG).
     ValueError
-        If the bytes are not a decodable image of at least 16x16 pixels.
+        If the image is smaller than 16x16 pixels.
     """
     if not data:
-        raise ValueError("empty image data")
+        raise UndecodableImage("empty image data")
     buf = np.frombuffer(data, dtype=np.uint8)
     size = jpeg_size(data)
     factor = reduction_for(size, params) if size is not None else 1
     if size is not None and factor > 1:
-        image = cv2.imdecode(buf, _REDUCED[factor] | cv2.IMREAD_IGNORE_ORIENTATION)
+        image = cv2.imdecode(buf, _REDUCED[factor])
         expected = (math.ceil(size[1] / factor), math.ceil(size[0] / factor))
         if image is not None and image.shape[:2] == expected:
             reduced = np.asarray(image, np.uint8)
             return confirm(reduced, detect_reduced(reduced, profile, full_size=size), confirmed)
-    image = cv2.imdecode(buf, cv2.IMREAD_COLOR | cv2.IMREAD_IGNORE_ORIENTATION)
+    image = cv2.imdecode(buf, _REDUCED[1])
     if image is None:
-        raise ValueError("image data is not a decodable JPEG or PNG")
+        raise UndecodableImage("image data is not a decodable JPEG or PNG")
     full = np.asarray(image, np.uint8)
     result = detect_reduced(full, profile, full_size=(full.shape[1], full.shape[0]))
     return confirm(full, result, confirmed)

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from collections.abc import Callable
+from pathlib import Path
 from typing import NoReturn
 
 
@@ -16,6 +18,31 @@ def fail(message: str) -> int:
     """
     print(f"depot: {message}", file=sys.stderr)
     return 2
+
+
+def writable(out: Path, option: str, example: str) -> str | None:
+    """Why ``out`` (given as ``option``) cannot be written, with the fix, or None: checked
+    before the work, so a mistyped ``--out`` does not cost a calibration or a training and
+    then a traceback. ``example`` is a file name to suggest when ``out`` is a folder."""
+    if out.is_dir():
+        return f"{option} {out} is a folder; give a file name, e.g. {option} {out / example}"
+    parent = out.parent
+    if not parent.exists():
+        return f"folder {parent} does not exist; create it or choose another {option}"
+    if not parent.is_dir():
+        return f"{parent} is not a folder; choose another {option}"
+    if not os.access(parent, os.W_OK):
+        return f"folder {parent} is not writable; choose another {option}"
+    return None
+
+
+def write_file(out: Path, text: str, option: str) -> str | None:
+    """Write ``text`` to ``out``; why it failed (with the fix), or None."""
+    try:
+        out.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        return f"cannot write {out}: {exc.strerror or exc}; choose another {option}"
+    return None
 
 
 class DepotHelpFormatter(argparse.HelpFormatter):
@@ -67,11 +94,16 @@ def number(
     Every numeric option of the CLI goes through it, so 0, -1, nan or inf never reach a
     division or an allocation (found by the independent trial: --pixel-fov 0 divided by zero).
     """
+
+    def shown(bound: float) -> str:
+        # a whole-number bound in full: 2**32 - 1 is 4294967295, not 4.29497e+09
+        return str(int(bound)) if kind is int and float(bound).is_integer() else f"{bound:g}"
+
     words = []
     if low is not None:
-        words.append(f"{'more than' if low_open else 'at least'} {low:g}")
+        words.append(f"{'more than' if low_open else 'at least'} {shown(low)}")
     if high is not None:
-        words.append(f"{'less than' if high_open else 'at most'} {high:g}")
+        words.append(f"{'less than' if high_open else 'at most'} {shown(high)}")
     noun = "a whole number" if kind is int else "a number"
     wanted = noun + (" " + " and ".join(words) if words else "")
 

@@ -8,15 +8,27 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import os
 import re
+import sys
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import cv2
 import numpy as np
 
-from service.commands._common import SEED, fail, number
-from tail_check import DEFAULT_PROFILE, CameraProfile, calibrate, detect_confirmed, load_profile
+from service.commands._common import SEED, fail, number, writable, write_file
+from tail_check import (
+    DEFAULT_PROFILE,
+    CameraProfile,
+    DetectionResult,
+    UndecodableImage,
+    calibrate,
+    decode_snapshot,
+    detect_snapshot,
+    load_profile,
+)
 from tail_check.study import StudyResult, StudySample, epsilon_curves
 from tail_check.synth import write_study_set
 
@@ -27,18 +39,71 @@ def _profile(path: str | None) -> CameraProfile:
     return DEFAULT_PROFILE if path is None else load_profile(path)
 
 
-def _read_image(path: str) -> np.ndarray:
-    # OpenCV logs its own WARN line to stderr for a file it cannot open; depot's message below
-    # says the same with the fix, so OpenCV is silenced for this read only.
+@contextmanager
+def _decoders_quiet() -> Iterator[None]:
+    """Silence OpenCV's log and what libjpeg/libpng write to the process's stderr themselves
+    (``Corrupt JPEG data: ...``, ``libpng error: ...``): depot's message says what matters.
+
+    The CLI is one thread; the service (threads) must never swap its stderr like this.
+    """
     level = cv2.utils.logging.getLogLevel()
     cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    sys.stderr.flush()
+    saved = os.dup(2)
     try:
-        image = cv2.imread(path, cv2.IMREAD_COLOR)
+        quiet = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(quiet, 2)
+        os.close(quiet)
+        yield
     finally:
+        sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
         cv2.utils.logging.setLogLevel(level)
-    if image is None:
-        raise ValueError(f"cannot read image {path!r} (missing, or not a JPEG/PNG file)")
-    return np.asarray(image, dtype=np.uint8)
+
+
+def _read_bytes(path: str) -> bytes:
+    try:
+        return Path(path).read_bytes()
+    except OSError as exc:
+        raise ValueError(
+            f"cannot read image {path!r} (missing, or not a JPEG/PNG file: {exc.strerror})"
+        ) from None
+
+
+def _unreadable(path: str, exc: UndecodableImage) -> ValueError:
+    return ValueError(f"cannot read image {path!r} (not a whole JPEG/PNG file: {exc})")
+
+
+def _read_image(path: str) -> np.ndarray:
+    """The image's pixels as the service decodes them (EXIF orientation ignored)."""
+    data = _read_bytes(path)
+    try:
+        with _decoders_quiet():
+            return decode_snapshot(data)
+    except UndecodableImage as exc:
+        raise _unreadable(path, exc) from None
+
+
+def _judge(path: str, profile: CameraProfile) -> DetectionResult:
+    """The service's verdict on the file's bytes: ``detect_snapshot`` (a JPEG decoded at
+    reduced size, EXIF orientation ignored, a ``present`` confirmed by the learned verifiers,
+    as ``detect_confirmed``). ``cv2.imread`` turned EXIF-rotated JPEGs and judged truncated
+    ones (filled grey), which the service refuses.
+
+    Raises
+    ------
+    ValueError
+        With depot's message: the file cannot be read, decoded or judged.
+    """
+    data = _read_bytes(path)
+    try:
+        with _decoders_quiet():
+            return detect_snapshot(data, profile)
+    except UndecodableImage as exc:
+        raise _unreadable(path, exc) from None
+    except ValueError as exc:
+        raise ValueError(f"cannot judge image {path!r}: {exc}") from None
 
 
 def _tail_check(args: argparse.Namespace) -> int:
@@ -49,8 +114,7 @@ def _tail_check(args: argparse.Namespace) -> int:
     failed = False
     for name in args.files:
         try:
-            # the service's verdict: a present must be confirmed by the learned verifier
-            result = detect_confirmed(_read_image(name), profile)
+            result = _judge(name, profile)
         except ValueError as exc:
             fail(str(exc))
             failed = True
@@ -77,15 +141,40 @@ def _parse_point(text: str) -> tuple[float, float]:
         raise argparse.ArgumentTypeError(f"expected X,Y pixel coordinates, got {text!r}") from None
 
 
+def _profile_name(text: str) -> str:
+    if not text.strip():
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is empty; name the camera, e.g. --name platform-3-east"
+        )
+    return text
+
+
+# argparse takes "-1,10" for an option and says "expected one argument"; calibrate has no
+# option that looks like a number, so a value starting with "-" and a digit is a value (and
+# a negative coordinate is then refused as outside the image).
+_NEGATIVE_VALUE = re.compile(r"^-\.?\d")
+
+
 def _calibrate(args: argparse.Namespace) -> int:
+    out = Path(args.out) if args.out else None
+    problem = None if out is None else writable(out, "--out", "camera.json")
+    if problem is not None:
+        return fail(problem)
     try:
         base = _profile(args.base)
+    except ValueError as exc:
+        return fail(
+            f"{exc}; --base must be a profile written by `depot calibrate`"
+            " (leave it out for the standard signal red)"
+        )
+    try:
         profile = calibrate(_read_image(args.image), args.disc, base=base, name=args.name)
     except ValueError as exc:
         return fail(f"{exc}; give a snapshot with the disc visible and --disc X,Y inside it")
     text = profile.to_json()
-    if args.out:
-        Path(args.out).write_text(text + "\n", encoding="utf-8")
+    problem = None if out is None else write_file(out, text + "\n", "--out")
+    if problem is not None:
+        return fail(problem)
     print(text)
     return 0
 
@@ -132,11 +221,14 @@ def _tail_study(args: argparse.Namespace) -> int:
         return fail(f"{directory} is not a folder; give the folder of labelled snapshots")
     if not labels.is_file():
         return fail(f"labels file {labels} not found; pass --labels (or run `depot tail-synth`)")
+    plot = Path(args.plot) if args.plot else directory / "epsilon.png"
+    problem = writable(plot, "--plot", "epsilon.png")
+    if problem is not None:
+        return fail(problem)
     try:
         result = epsilon_curves(_study_samples(directory, labels), kernel_fraction=args.kernel)
     except (ValueError, KeyError) as exc:
         return fail(f"{exc}; the labels need columns file,x,y,w,h,s_ref,ref_x,ref_y")
-    plot = Path(args.plot) if args.plot else directory / "epsilon.png"
     _plot(result, plot)
     print(result.table())
     print(f"\nimages: {result.count}; filter size N = {result.kernel_size} px (working scale)")
@@ -214,18 +306,23 @@ def _tail_train(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.suffix != ".json":
         return fail(f"--out {out} must end in .json (the model is stored as JSON, never pickle)")
-    if not out.parent.is_dir():
-        return fail(f"folder {out.parent} does not exist; create it or choose another --out")
+    described = out.with_suffix(".training.json")
+    for path in (out, described):
+        problem = writable(path, "--out", "model.json")
+        if problem is not None:
+            return fail(problem)
     params = TrainParams(train_count=args.count, validation_count=args.validation)
     try:
         model = train(generators, seed=args.seed, params=params)
     except ValueError as exc:
         return fail(f"{exc}; train on more scenes (--count)")
-    out.write_text(model.to_json() + "\n", encoding="utf-8")
     description = json.dumps(model.meta, indent=2)
-    out.with_suffix(".training.json").write_text(description + "\n", encoding="utf-8")
+    for path, text in ((out, model.to_json()), (described, description)):
+        problem = write_file(path, text + "\n", "--out")
+        if problem is not None:
+            return fail(problem)
     print(description)
-    print(f"wrote {out} and {out.with_suffix('.training.json')}")
+    print(f"wrote {out} and {described}")
     return 0
 
 
@@ -240,14 +337,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     p = subparsers.add_parser("calibrate", help="print a camera profile from a snapshot")
     p.add_argument("image", help="snapshot with the disc visible")
     p.add_argument(
-        "--disc", required=True, type=_parse_point, metavar="X,Y", help="a pixel inside the disc"
+        "--disc",
+        required=True,
+        type=_parse_point,
+        metavar="X,Y",
+        help="a pixel inside the disc, in the stored image (EXIF orientation ignored, as the"
+        " service does)",
     )
     p.add_argument(
         "--base", help="profile whose other settings to keep (default: standard signal red)"
     )
-    p.add_argument("--name", default="calibrated", help="profile name")
+    p.add_argument("--name", type=_profile_name, default="calibrated", help="profile name")
     p.add_argument("--out", help="also write the profile to this file (default: print only)")
     p.set_defaults(func=_calibrate)
+    p._negative_number_matcher = _NEGATIVE_VALUE
 
     p = subparsers.add_parser("tail-study", help="ε(c_Δ) study for box/disk/Gaussian filters")
     p.add_argument("directory", metavar="DIR", help="folder of labelled snapshots")
