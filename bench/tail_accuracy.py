@@ -56,7 +56,7 @@ from dataclasses import dataclass
 import cv2
 
 from tail_check import DetectionResult, detect
-from tail_check.confirm import CONFIRM_PARAMS, confirm_with
+from tail_check.confirm import CONFIRM_PARAMS, confirm_with, hold_lettering
 from tail_check.dataset import GENERATORS, Sample, real_dir, real_photos, scenes
 from tail_check.evaluate import Tally
 from tail_check.pipeline import (
@@ -100,7 +100,9 @@ def _tally(seen: list[Seen], variant: str, model: str | None) -> Tally:
         if model is None:
             verdict = item.hand.verdict
         elif variant == "confirmed":
-            verdict = confirm_with(item.candidates, 1.0, item.hand, models).verdict
+            # the service's rule: lettering held first, then every model must confirm
+            hand = hold_lettering(item.sample.image, item.hand)
+            verdict = confirm_with(item.candidates, 1.0, hand, models).verdict
         else:
             verdict = judge(item.candidates, load_model(model), params, item.hand.verdict)[0]
         out.add(item.sample, verdict)

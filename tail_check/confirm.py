@@ -24,6 +24,11 @@ the tuning seeds 310000-330149 of A, A's randomised mode and B (313 hand-tuned
 of 271 true discs of A and 19 of 37 of B; ``AB`` alone kept 241 and 24 with one false.
 The verifiers never turn anything into ``present``, and run only on ``present``
 verdicts, so the other verdicts cost nothing more.
+
+Before the verifiers, a ``present`` whose region has letter-like neighbours of its own
+paint on its line is held ``uncertain`` (:mod:`tail_check.lettering`): the verifiers
+describe a region and its rings only, and on generator A's randomised validation seeds
+201000-201599 (never used before) all three believed a red Ø ending a word.
 """
 
 from __future__ import annotations
@@ -35,12 +40,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .detect import DetectionResult, detect
+from .lettering import LETTERING, LetteringParams, lettering_reason
 from .pipeline import PIPELINE_PROFILE, Candidate, TreeModel, load_model
 from .pipeline.candidates import iter_candidates
 from .pipeline.proposals import make_maps
 from .profile import CameraProfile
 
-__all__ = ["CONFIRM_PARAMS", "ConfirmParams", "confirm", "confirm_with", "detect_confirmed"]
+__all__ = [
+    "CONFIRM_PARAMS",
+    "ConfirmParams",
+    "confirm",
+    "confirm_with",
+    "detect_confirmed",
+    "hold_lettering",
+]
 
 
 @dataclass(frozen=True)
@@ -57,6 +70,8 @@ class ConfirmParams:
     search_margin : proposals are described only when their centre lies in the region
         grown by ``near * search_margin`` (segmentation can move a candidate's centre off
         its proposal's, so more than ``near``).
+    lettering : what counts as a row of letters beside the region (the ``present`` is
+        then held ``uncertain`` before any verifier runs).
     enabled : False returns every result unchanged (for the comparison in
         ``bench.tail_accuracy``, never in the service).
     """
@@ -64,6 +79,7 @@ class ConfirmParams:
     models: tuple[str, ...] = ("AB", "A", "B")
     near: float = 0.5
     search_margin: float = 2.0
+    lettering: LetteringParams = LETTERING
     enabled: bool = True
 
 
@@ -116,6 +132,9 @@ def confirm(
     """
     if not _checked(result, params):
         return result
+    held = hold_lettering(image_bgr, result, params)
+    if held is not result:
+        return held
     scale = image_bgr.shape[1] / max(1, result.image_size[0])
     # Only proposals near the region are described (most of the verifier's time); the
     # margin is wider than ``near`` because segmentation can move a candidate's centre.
@@ -127,6 +146,24 @@ def confirm(
     candidates = iter_candidates(maps, where=where)
     models = [load_model(name) for name in params.models]
     return confirm_with(candidates, scale, result, models, params)
+
+
+def hold_lettering(
+    image_bgr: NDArray[np.uint8],
+    result: DetectionResult,
+    params: ConfirmParams = CONFIRM_PARAMS,
+) -> DetectionResult:
+    """``result`` unchanged, or its ``present`` held ``uncertain`` when the region stands in
+    a row of letters of its paint (:func:`~.lettering.lettering_reason`); ``image_bgr`` at
+    any scale, as in :func:`confirm`."""
+    if not _checked(result, params):
+        return result
+    x0, y0, x1, y1 = _grown(result, image_bgr.shape[1] / max(1, result.image_size[0]), 0.0)
+    box = (int(round(x0)), int(round(y0)), int(round(x1 - x0)), int(round(y1 - y0)))
+    reason = lettering_reason(image_bgr, box, params=params.lettering)
+    if reason is None:
+        return result
+    return replace(result, verdict="uncertain", reasons=(reason, *result.reasons))
 
 
 def _trained_on(model: TreeModel) -> str:
