@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import pkgutil
 import sys
 import warnings
@@ -300,6 +301,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     try:
         return int(args.func(args))
+    except BrokenPipeError:
+        return _reader_gone()
     except UnsupportedDatabase as exc:
         return fail(str(exc))
     except DepotError as exc:
@@ -329,6 +332,18 @@ def main(argv: Sequence[str] | None = None) -> int:
             " (postgresql+psycopg://USER@HOST/DB, or unset for SQLite under DEPOT_DATA_DIR)"
             " and that it is migrated (depot migrate)"
         )
+
+
+SIGPIPE_EXIT = 141
+"""Exit code of a command whose reader closed the pipe (128 + SIGPIPE, as shells report)."""
+
+
+def _reader_gone() -> int:
+    """``depot ... | head``: the reader has stopped; end quietly. Standard output goes to
+    the null device so that the interpreter's final flush cannot fail again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    return SIGPIPE_EXIT
 
 
 def _missing_action(group: argparse.ArgumentParser) -> int:
