@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 from pathlib import Path
@@ -11,17 +10,11 @@ import cv2
 import numpy as np
 import pytest
 
-from service.commands.tail_check import register
 from tail_check import CameraProfile
 from tail_check.synth import CONDITIONS, render_snapshot, write_study_set
+from tests.tail_check.tailkit import plain_disc_scene, run_tail_command
 
-
-def _run(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser()
-    sub = parser.add_subparsers(dest="command")
-    register(sub)
-    args = parser.parse_args(argv)
-    return int(args.func(args))
+_run = run_tail_command
 
 
 @pytest.fixture(scope="module")
@@ -61,15 +54,7 @@ def test_tail_check_errors_return_2(tmp_path: Path, capsys) -> None:
 
 
 def test_calibrate_prints_a_profile_that_detects(tmp_path: Path, capsys) -> None:
-    image, label = render_snapshot(
-        8,
-        disc=True,
-        condition="day",
-        car_colour="blue",
-        distractors=(),
-        occlusion=0.0,
-        jpeg_quality=90,
-    )
+    image, label = plain_disc_scene()
     path = tmp_path / "cal.png"
     cv2.imwrite(str(path), image)
     x, y = label.reference_point  # type: ignore[misc]

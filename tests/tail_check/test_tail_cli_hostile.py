@@ -8,7 +8,6 @@ profiles that are not numbers, and unclear messages.
 
 from __future__ import annotations
 
-import argparse
 import io
 import json
 import subprocess
@@ -23,7 +22,6 @@ from PIL import Image
 
 import tail_check
 from service.cli import main
-from service.commands.tail_check import register
 from tail_check import (
     CameraProfile,
     calibrate,
@@ -32,33 +30,18 @@ from tail_check import (
     detect_snapshot,
     load_profile,
 )
-from tail_check.synth import render_snapshot
+from tests.tail_check.tailkit import plain_disc_scene, run_tail_command
 
 # A blue car end with the disc on it; the disc's reference point in stored pixels.
 DISC = "413,361"
 
 
-def _run(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser()
-    sub = parser.add_subparsers(dest="command")
-    register(sub)
-    args = parser.parse_args(argv)
-    return int(args.func(args))
+_run = run_tail_command
 
 
 @pytest.fixture(scope="module")
 def scene() -> NDArray[np.uint8]:
-    image, label = render_snapshot(
-        8,
-        disc=True,
-        condition="day",
-        car_colour="blue",
-        distractors=(),
-        occlusion=0.0,
-        jpeg_quality=90,
-    )
-    assert label.reference_point == (413, 361)
-    return image
+    return plain_disc_scene()[0]
 
 
 @pytest.fixture()

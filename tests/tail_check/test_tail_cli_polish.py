@@ -2,21 +2,14 @@
 
 from __future__ import annotations
 
-import argparse
 import re
 from pathlib import Path
 
 import pytest
 
-from service.commands.tail_check import register
+from tests.tail_check.tailkit import run_tail_command
 
-
-def _run(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser()
-    sub = parser.add_subparsers(dest="command")
-    register(sub)
-    args = parser.parse_args(argv)
-    return int(args.func(args))
+_run = run_tail_command
 
 
 @pytest.mark.parametrize("size", ["640", "640x", "x480", "640x480x3", "axb", "0x480"])

@@ -25,6 +25,7 @@ from tail_check.confirm import CONFIRM_PARAMS, confirm_with
 from tail_check.dataset import Sample, scenes
 from tail_check.detect import DetectionResult
 from tail_check.pipeline import PIPELINE_PROFILE, find_candidates, load_model
+from tests.tail_check.tailkit import hand_presents_on_discs
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -115,12 +116,7 @@ when the one trained on both generators alone was asked)."""
 
 def test_most_true_discs_stay_present() -> None:
     kept = total = 0
-    for sample in scenes("A", "heldout", 200, offset=30000):
-        if not sample.disc:
-            continue
-        hand = detect(sample.image)
-        if hand.verdict != "present":
-            continue
+    for sample, hand in hand_presents_on_discs(scenes("A", "heldout", 200, offset=30000)):
         total += 1
         kept += confirm(sample.image, hand).verdict == "present"
     assert total == 84

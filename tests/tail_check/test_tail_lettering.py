@@ -21,6 +21,7 @@ from tail_check import confirm, detect, detect_snapshot
 from tail_check.confirm import hold_lettering
 from tail_check.dataset import Sample, scenes
 from tail_check.lettering import LetteringParams, lettering_reason, row_neighbours
+from tests.tail_check.tailkit import hand_presents_on_discs
 
 ROOT = Path(__file__).resolve().parents[2]
 BLUE_GREY = (120, 100, 80)  # BGR body paint
@@ -139,12 +140,7 @@ on 201000-201599, A:201242, whose box was on the red lettering "6Q0", not the di
 
 def test_true_discs_are_not_taken_for_letters() -> None:
     held = total = 0
-    for sample in scenes("A", "heldout", 120, offset=40000):
-        if not sample.disc:
-            continue
-        hand = detect(sample.image)
-        if hand.verdict != "present":
-            continue
+    for sample, hand in hand_presents_on_discs(scenes("A", "heldout", 120, offset=40000)):
         total += 1
         held += hold_lettering(sample.image, hand).verdict == "uncertain"
     assert total >= 50

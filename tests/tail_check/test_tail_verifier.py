@@ -11,7 +11,7 @@ import pytest
 
 from tail_check.pipeline import FEATURE_NAMES, MODEL_DIR, TreeModel, load_model, run_pipeline
 from tail_check.pipeline.verifier import VerifierParams, fit
-from tail_check.synth import render_snapshot
+from tests.tail_check.tailkit import plain_disc_scene
 
 THRESHOLDS = {"present_threshold": 0.9, "uncertain_threshold": 0.3}
 
@@ -83,15 +83,7 @@ def test_shipped_models_are_json_with_their_training_description() -> None:
 
 
 def test_pipeline_keeps_the_detect_contract() -> None:
-    image, label = render_snapshot(
-        8,
-        disc=True,
-        condition="day",
-        car_colour="blue",
-        distractors=(),
-        occlusion=0.0,
-        jpeg_quality=90,
-    )
+    image, label = plain_disc_scene()
     result = run_pipeline(image)
     record = result.to_dict()
     assert {"verdict", "score", "bbox", "pixel_fraction", "reasons"} <= set(record)
