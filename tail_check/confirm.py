@@ -67,9 +67,6 @@ class ConfirmParams:
         all believe one candidate.
     near : a verifier candidate speaks for the hand-tuned region when its centre lies in
         the region's box grown by this fraction of the box's width and height on each side.
-    search_margin : proposals are described only when their centre lies in the region
-        grown by ``near * search_margin`` (segmentation can move a candidate's centre off
-        its proposal's, so more than ``near``).
     lettering : what counts as a row of letters beside the region (the ``present`` is
         then held ``uncertain`` before any verifier runs).
     enabled : False returns every result unchanged (for the comparison in
@@ -78,7 +75,6 @@ class ConfirmParams:
 
     models: tuple[str, ...] = ("AB", "A", "B")
     near: float = 0.5
-    search_margin: float = 2.0
     lettering: LetteringParams = LETTERING
     enabled: bool = True
 
@@ -136,14 +132,14 @@ def confirm(
     if held is not result:
         return held
     scale = image_bgr.shape[1] / max(1, result.image_size[0])
-    # Only proposals near the region are described (most of the verifier's time); the
-    # margin is wider than ``near`` because segmentation can move a candidate's centre.
-    x0, y0, x1, y1 = _grown(result, scale, params.near * params.search_margin)
-    where = (int(x0), int(y0), int(x1 - x0) + 1, int(y1 - y0) + 1)
     maps = make_maps(image_bgr, PIPELINE_PROFILE)
-    # Lazily: the first near candidate the verifier believes ends the search, with the
-    # verdict all of them would give (a present stays present; only a doubt needs them all).
-    candidates = iter_candidates(maps, where=where)
+    # The whole frame's candidates, as the verifiers were trained and their thresholds
+    # chosen on (the strongest ``max_candidates``, merged): describing only the proposals
+    # near the region let weak ones through that the whole frame leaves out, and one of
+    # them fooled every verifier (generator C's fresh seed 380229, a lit signal). Lazily:
+    # the first near candidate every verifier believes ends the search, with the verdict
+    # all of them would give (a present stays present; only a doubt needs them all).
+    candidates = iter_candidates(maps)
     models = [load_model(name) for name in params.models]
     return confirm_with(candidates, scale, result, models, params)
 

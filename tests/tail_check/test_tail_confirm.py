@@ -126,16 +126,24 @@ def test_most_true_discs_stay_present() -> None:
 def _confirmed_on_every_candidate(
     image: NDArray[np.uint8], hand: DetectionResult
 ) -> DetectionResult:
-    """:func:`confirm` as it was first written: every candidate proposed in the searched
-    box (the region grown by ``near * search_margin`` of its size) described, then judged
-    together."""
-    assert hand.bbox is not None
-    x, y, w, h = hand.bbox
-    grow = CONFIRM_PARAMS.near * CONFIRM_PARAMS.search_margin
-    x0, y0, x1, y1 = x - w * grow, y - h * grow, x + w + w * grow, y + h + h * grow
-    where = (int(x0), int(y0), int(x1 - x0) + 1, int(y1 - y0) + 1)
-    candidates, _ = find_candidates(image, PIPELINE_PROFILE, where=where)
+    """:func:`confirm` judging every candidate of the whole frame at once, as the
+    verifiers were trained and calibrated on them (and as ``bench.tail_accuracy``
+    judges): the strongest ``max_candidates``, merged."""
+    candidates, _ = find_candidates(image, PIPELINE_PROFILE)
     return confirm_with(candidates, 1.0, hand, [load_model(m) for m in CONFIRM_PARAMS.models])
+
+
+def test_the_service_judges_the_candidates_the_verifiers_were_calibrated_on() -> None:
+    """Generator C's fresh seed 380229 (a lit signal at dusk): when only the proposals
+    near the region were described, a weak one that the whole frame's strongest 24 leave
+    out was believed by every verifier, and the service said ``present`` where the
+    benchmark, judging the whole frame's candidates, said ``uncertain``."""
+    sample = _scene("C", "heldout", 80229)
+    assert not sample.disc and sample.kind == "signal_light"
+    hand = detect(sample.image)
+    assert hand.verdict == "present"
+    assert confirm(sample.image, hand) == _confirmed_on_every_candidate(sample.image, hand)
+    assert confirm(sample.image, hand).verdict == "uncertain"
 
 
 def test_confirming_stops_describing_once_the_verifier_believes_a_candidate(
