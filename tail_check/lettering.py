@@ -110,16 +110,22 @@ def _paint_of(region: NDArray[np.float32], share: float) -> NDArray[np.float32]:
     return np.asarray(np.median(pixels[keep], axis=0), np.float32)
 
 
-def _paint_mask(
-    lab: NDArray[np.float32], paint: NDArray[np.float32], p: LetteringParams, limit: float
-) -> NDArray[np.uint8]:
-    """Pixels of ``lab`` (h, w, 3) within ``limit`` of ``paint`` (see the parameters)."""
+def _paint_masks(
+    lab: NDArray[np.float32], paint: NDArray[np.float32], p: LetteringParams
+) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
+    """Pixels of ``lab`` (h, w, 3) of the region's ink (within ``paint_distance`` of
+    ``paint``) and of about its paint (within ``body_distance``), both colourful enough
+    (see the parameters). Squared distances: one pass over the window for both."""
     weight = np.array([p.lightness_weight, 1.0, 1.0], np.float32)
-    distance = np.sqrt((((lab - paint) * weight) ** 2).sum(axis=2))
-    chroma = _chroma(lab)
+    diff = (lab - paint) * weight
+    distance2 = np.einsum("ijk,ijk->ij", diff, diff)
+    chroma = lab[..., 1:] - np.float32(_NEUTRAL)
+    chroma2 = np.einsum("ijk,ijk->ij", chroma, chroma)
     paint_chroma = math.hypot(float(paint[1]) - _NEUTRAL, float(paint[2]) - _NEUTRAL)
-    near = (distance <= limit) & (chroma >= p.chroma_share * paint_chroma)
-    return np.asarray(near, np.uint8)
+    colourful = chroma2 >= (p.chroma_share * paint_chroma) ** 2
+    ink = (distance2 <= p.paint_distance**2) & colourful
+    body = (distance2 <= p.body_distance**2) & colourful
+    return np.asarray(ink, np.uint8), np.asarray(body, np.uint8)
 
 
 def row_neighbours(
@@ -152,10 +158,9 @@ def row_neighbours(
     paint = _paint_of(region, params.colourful)
     line = np.zeros(lab.shape[0], bool)
     line[max(0, y - y0) : y - y0 + h] = True
-    body = _paint_mask(lab, paint, params, params.body_distance)
+    mask, body = _paint_masks(lab, paint, params)
     if (~line).any() and float(body[~line].mean()) > params.off_line_share:
         return []
-    mask = _paint_mask(lab, paint, params, params.paint_distance)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     found: list[BBox] = []
     for k in range(1, n):
