@@ -317,10 +317,15 @@ def _tail_train(args: argparse.Namespace) -> int:
     except ValueError as exc:
         return fail(f"{exc}; train on more scenes (--count)")
     description = json.dumps(model.meta, indent=2)
+    written: list[Path] = []
     for path, text in ((out, model.to_json()), (described, description)):
         problem = write_file(path, text + "\n", "--out")
         if problem is not None:
+            # a model is never left without the description of what it was trained on
+            for done in written:
+                done.unlink(missing_ok=True)
             return fail(problem)
+        written.append(path)
     print(description)
     print(f"wrote {out} and {described}")
     return 0
