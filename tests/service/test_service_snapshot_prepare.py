@@ -29,6 +29,15 @@ from tests.service.linekit import build_line
 from tests.service.test_service_snapshots import encoded, upload
 
 
+@pytest.fixture(autouse=True)
+def _nothing_prepared() -> None:
+    """Each test starts with no prepared detection: they are kept per (camera, image) in
+    the process, and an earlier test uploading the same image from the same camera in
+    this worker may have left one that this test's derivation would then use."""
+    with tail._prepared_lock:
+        tail._prepared.clear()
+
+
 @pytest.fixture
 def detections(monkeypatch: pytest.MonkeyPatch) -> list[bool]:
     """One entry per detection: whether it ran while the event was being stored."""
