@@ -158,20 +158,14 @@ def detect_snapshot(
     ValueError
         If the image is smaller than 16x16 pixels.
     """
-    if not data:
-        raise UndecodableImage("empty image data")
-    buf = np.frombuffer(data, dtype=np.uint8)
     size = jpeg_size(data)
     factor = reduction_for(size, params) if size is not None else 1
     if size is not None and factor > 1:
-        image = cv2.imdecode(buf, _REDUCED[factor])
+        image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), _REDUCED[factor])
         expected = (math.ceil(size[1] / factor), math.ceil(size[0] / factor))
         if image is not None and image.shape[:2] == expected:
             reduced = np.asarray(image, np.uint8)
             return confirm(reduced, detect_reduced(reduced, profile, full_size=size), confirmed)
-    image = cv2.imdecode(buf, _REDUCED[1])
-    if image is None:
-        raise UndecodableImage("image data is not a decodable JPEG or PNG")
-    full = np.asarray(image, np.uint8)
+    full = decode_snapshot(data)  # refuses empty and undecodable data
     result = detect_reduced(full, profile, full_size=(full.shape[1], full.shape[0]))
     return confirm(full, result, confirmed)
