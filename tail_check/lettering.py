@@ -98,15 +98,18 @@ def _window(shape: tuple[int, ...], box: BBox, reach: float) -> tuple[int, int, 
 _NEUTRAL = 128.0  # OpenCV's 8-bit CIELAB stores a* and b* offset by 128
 
 
-def _chroma(lab: NDArray[np.float32]) -> NDArray[np.float32]:
-    return np.asarray(np.hypot(lab[..., 1] - _NEUTRAL, lab[..., 2] - _NEUTRAL), np.float32)
+def _chroma2(lab: NDArray[np.float32]) -> NDArray[np.float32]:
+    """Squared chroma of CIELAB pixels (..., 3): no square root, as only order and
+    thresholds are asked of it."""
+    ab = lab[..., 1:] - np.float32(_NEUTRAL)
+    return np.asarray(np.einsum("...k,...k->...", ab, ab), np.float32)
 
 
 def _paint_of(region: NDArray[np.float32], share: float) -> NDArray[np.float32]:
     """Median CIELAB colour of the ``share`` most colourful pixels of ``region`` (h, w, 3)."""
     pixels = region.reshape(-1, 3)
-    chroma = _chroma(pixels)
-    keep = chroma >= np.quantile(chroma, 1.0 - share)
+    chroma2 = _chroma2(pixels)
+    keep = chroma2 >= np.quantile(chroma2, 1.0 - share)
     return np.asarray(np.median(pixels[keep], axis=0), np.float32)
 
 
@@ -119,10 +122,7 @@ def _paint_masks(
     weight = np.array([p.lightness_weight, 1.0, 1.0], np.float32)
     diff = (lab - paint) * weight
     distance2 = np.einsum("ijk,ijk->ij", diff, diff)
-    chroma = lab[..., 1:] - np.float32(_NEUTRAL)
-    chroma2 = np.einsum("ijk,ijk->ij", chroma, chroma)
-    paint_chroma = math.hypot(float(paint[1]) - _NEUTRAL, float(paint[2]) - _NEUTRAL)
-    colourful = chroma2 >= (p.chroma_share * paint_chroma) ** 2
+    colourful = _chroma2(lab) >= p.chroma_share**2 * float(_chroma2(paint))
     ink = (distance2 <= p.paint_distance**2) & colourful
     body = (distance2 <= p.body_distance**2) & colourful
     return np.asarray(ink, np.uint8), np.asarray(body, np.uint8)
@@ -152,12 +152,14 @@ def row_neighbours(
     x0, y0, x1, y1 = _window(image_bgr.shape, box, params.reach)
     crop = image_bgr[y0:y1, x0:x1]
     lab = cv2.cvtColor(crop, cv2.COLOR_BGR2LAB).astype(np.float32)
-    region = lab[max(0, y - y0) : y - y0 + h, max(0, x - x0) : x - x0 + w]
+    local = (x - x0, y - y0, w, h)  # the box in window pixels
+    rows = slice(max(0, local[1]), local[1] + h)
+    region = lab[rows, max(0, local[0]) : local[0] + w]
     if region.size == 0:
         return []
     paint = _paint_of(region, params.colourful)
     line = np.zeros(lab.shape[0], bool)
-    line[max(0, y - y0) : y - y0 + h] = True
+    line[rows] = True
     mask, body = _paint_masks(lab, paint, params)
     if (~line).any() and float(body[~line].mean()) > params.off_line_share:
         return []
@@ -167,7 +169,7 @@ def row_neighbours(
         bx, by, bw, bh, area = (int(v) for v in stats[k])
         other = (bx + x0, by + y0, bw, bh)
         if _is_letter_beside(box, other, area, params) and _isolated(
-            body, (bx, by, bw, bh), (x - x0, y - y0, w, h), params
+            body, (bx, by, bw, bh), local, params
         ):
             found.append(other)
     return found
