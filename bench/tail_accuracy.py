@@ -89,6 +89,9 @@ class Seen:
     sample: Sample
     candidates: list[Candidate]
     hand: DetectionResult
+    lettered: DetectionResult
+    """``hand`` after the service's lettering check (:func:`~tail_check.confirm.hold_lettering`),
+    which every confirming model set starts from."""
 
 
 RANDOMISED_A = "Aw"
@@ -103,9 +106,12 @@ def _held_out(generator: str, count: int, offset: int) -> list[Sample]:
 
 
 def _seen(samples: list[Sample]) -> list[Seen]:
-    return [
-        Seen(s, find_candidates(s.image, PIPELINE_PROFILE)[0], detect(s.image)) for s in samples
-    ]
+    seen = []
+    for s in samples:
+        hand = detect(s.image)
+        candidates = find_candidates(s.image, PIPELINE_PROFILE)[0]
+        seen.append(Seen(s, candidates, hand, hold_lettering(s.image, hand)))
+    return seen
 
 
 def _tally(seen: list[Seen], variant: str, model: str | None) -> Tally:
@@ -118,8 +124,7 @@ def _tally(seen: list[Seen], variant: str, model: str | None) -> Tally:
             verdict = item.hand.verdict
         elif variant == "confirmed":
             # the service's rule: lettering held first, then every model must confirm
-            hand = hold_lettering(item.sample.image, item.hand)
-            verdict = confirm_with(item.candidates, 1.0, hand, models).verdict
+            verdict = confirm_with(item.candidates, 1.0, item.lettered, models).verdict
         else:
             verdict = judge(item.candidates, load_model(model), params, item.hand.verdict)[0]
         out.add(item.sample, verdict)
