@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 import tail_check.pipeline.candidates as candidates_stage
 from tail_check import ConfirmParams, confirm, detect, detect_snapshot
 from tail_check.confirm import CONFIRM_PARAMS, confirm_with
-from tail_check.dataset import Sample, scenes
+from tail_check.dataset import SPLITS, Sample, scenes
 from tail_check.detect import DetectionResult
 from tail_check.pipeline import PIPELINE_PROFILE, find_candidates, load_model
 from tests.tail_check.tailkit import hand_presents_on_discs
@@ -177,17 +177,64 @@ def test_confirming_stops_describing_once_the_verifier_believes_a_candidate(
     assert fewer >= kept * 0.8, (fewer, kept)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known false present of the service on generator A's randomised held-out seed"
-    " 370106 (python -m bench.tail_accuracy --generators Aw --offset 70000; 1 of 159 scenes"
-    " without a disc): a lit red signal lamp in snow, seen against the car's corner at"
-    " buffer-beam height, 35 px across at 1024x768, clipped white core in a red glow."
-    " Hand-tuned score 0.96 (the lamp check's glow width does not reach its limit at this"
-    " size) and every verifier believes it, though A's were trained on this mode; issue 11"
-    " stays open on it",
-)
-def test_the_service_does_not_call_a_lit_signal_lamp_in_snow_a_disc() -> None:
-    sample = _scene("A", "heldout_wide", 70106)
-    assert not sample.disc and sample.kind == "signal_head"
+def _known(generator: str, split: str, offset: int, kind: str, why: str) -> Any:
+    return pytest.param(
+        generator,
+        split,
+        offset,
+        kind,
+        marks=pytest.mark.xfail(strict=True, reason=why),
+        id=f"{generator}:{SPLITS[split] + offset}",
+    )
+
+
+KNOWN_SERVICE_FALSE_PRESENTS = [
+    _known(
+        "C",
+        "heldout",
+        70239,
+        "red_logo",
+        "known false present of the service on generator C's held-out seed 370239 (found"
+        " by python -m bench.tail_accuracy --offset 70000): a round red logo with white letters"
+        " mid-way up a red-brown box car's end wall, 41 px across in an overcast 958x639 scene."
+        " The hand-tuned detector scores it 1.00 and every verifier believes it (AB 0.77, A 0.67,"
+        " B 0.96 above 0.65, 0.57, 0.50): the logos of generators A and B did not teach them."
+        " A disc sits at the buffer beam and is plain red inside; issue 11 stays open on it",
+    ),
+    _known(
+        "A",
+        "validation",
+        1429,
+        "tail_lamp",
+        "known false present of the service on generator A's randomised validation seed"
+        " 201429 (1 of 706 scenes without a disc on 201000-202399, found while measuring the"
+        " lettering check): an unlit round tail lamp in a dark bezel just above the buffer beam"
+        " at night, 34 px across in a 1280x720 scene. Hand-tuned score 1.00; every verifier"
+        " barely above its threshold. Its inside is as bright as the scene (peak/median value"
+        " 1.4), like discs at dusk without a shining reflector, so no brightness rule separates"
+        " it; issue 11 stays open on it",
+    ),
+    _known(
+        "A",
+        "heldout_wide",
+        70106,
+        "signal_head",
+        "known false present of the service on generator A's randomised held-out seed"
+        " 370106 (python -m bench.tail_accuracy --generators Aw --offset 70000; 1 of 159 scenes"
+        " without a disc): a lit red signal lamp in snow, seen against the car's corner at"
+        " buffer-beam height, 35 px across at 1024x768, clipped white core in a red glow."
+        " Hand-tuned score 0.96 (the lamp check's glow width does not reach its limit at this"
+        " size) and every verifier believes it, though A's were trained on this mode; issue 11"
+        " stays open on it",
+    ),
+]
+"""The service's known false ``present``: strict xfails, so that fixing one shows."""
+
+
+@pytest.mark.parametrize(("generator", "split", "offset", "kind"), KNOWN_SERVICE_FALSE_PRESENTS)
+def test_the_service_does_not_call_a_known_hard_negative_a_disc(
+    generator: str, split: str, offset: int, kind: str
+) -> None:
+    sample = _scene(generator, split, offset)
+    assert not sample.disc and sample.kind == kind
     assert confirm(sample.image, detect(sample.image)).verdict != "present"

@@ -49,18 +49,3 @@ def test_no_verifier_is_trained_on_generator_c() -> None:
         train(("C",), seed=1)
     with pytest.raises(ValueError, match="generator C is kept for evaluation"):
         train(("A", "C"), seed=1)
-
-
-@pytest.mark.xfail(
-    strict=True,
-    reason="known false present of the service on generator C's held-out seed 370239 (found"
-    " by python -m bench.tail_accuracy --offset 70000): a round red logo with white letters"
-    " mid-way up a red-brown box car's end wall, 41 px across in an overcast 958x639 scene."
-    " The hand-tuned detector scores it 1.00 and every verifier believes it (AB 0.77, A 0.67,"
-    " B 0.96 above 0.65, 0.57, 0.50): the logos of generators A and B did not teach them. A disc"
-    " sits at the buffer beam and is plain red inside; issue 11 stays open on it",
-)
-def test_the_service_does_not_call_generator_cs_round_lettered_logo_a_disc() -> None:
-    sample = next(scenes("C", "heldout", 1, offset=70239))
-    assert not sample.disc and sample.kind == "red_logo"
-    assert detect_confirmed(sample.image).verdict != "present"
