@@ -15,7 +15,7 @@ from typing import Any
 
 from motion.braking_limits import BRAKING_LIMITS as LIM
 from motion.ranging import KMH_PER_MPS
-from service.commands._common import PROBABILITY, SEED, number
+from service.commands._common import PROBABILITY, SEED, number, values_may_look_negative
 
 # Monte Carlo runs: a million takes minutes on a 2-core host; more is a typing slip.
 MAX_RUNS = LIM.max_monte_carlo_runs
@@ -35,15 +35,9 @@ CHANNELS = number(int, low=1, high=LIM.max_channels)
 MEASUREMENT_TIME = number(low=0, high=LIM.max_measurement_time_s)
 COORDINATE = number(low=-LIM.max_abs_coordinate_m, high=LIM.max_abs_coordinate_m)
 
-# argparse takes "-1e6" (or "-inf") for an option and says "expected one argument";
-# these parsers have no option that looks like a number, so any number is a value.
-# (``--gradient=-1e6`` works with any parser.)
+# Any number may be negative (``-1e6``, ``-inf``): these parsers have no option that looks
+# like a number.
 _NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.I)
-
-
-def _numbers_may_be_negative(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    parser._negative_number_matcher = _NEGATIVE_NUMBER
-    return parser
 
 
 def add_braking_parsers(sub: Any) -> dict[str, argparse.ArgumentParser]:
@@ -131,5 +125,5 @@ def add_braking_parsers(sub: Any) -> dict[str, argparse.ArgumentParser]:
     )
     m.add_argument("--json", action="store_true", help="print JSON instead of text")
     for parser in (pl, m):
-        _numbers_may_be_negative(parser)
+        values_may_look_negative(parser, _NEGATIVE_NUMBER)
     return {"trials": t, "exceedance": x, "plan": pl, "montecarlo": m}

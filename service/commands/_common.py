@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -34,6 +35,20 @@ def writable(out: Path, option: str, example: str) -> str | None:
     if not os.access(parent, os.W_OK):
         return f"folder {parent} is not writable; choose another {option}"
     return None
+
+
+def values_may_look_negative(
+    parser: argparse.ArgumentParser, value: re.Pattern[str]
+) -> argparse.ArgumentParser:
+    """Let ``parser`` take arguments matching ``value`` (e.g. ``-1e6``, ``-1,10``) as values.
+
+    argparse takes anything starting with "-" and a digit for an option unless the parser
+    has an option that looks like a number, and says "expected one argument"; for parsers
+    with no such option a value of that form is a value (then refused, if it must be, by
+    its own check). ``--option=-1`` works with any parser.
+    """
+    parser._negative_number_matcher = value  # argparse's own (private) hook for this
+    return parser
 
 
 def write_file(out: Path, text: str, option: str) -> str | None:

@@ -18,7 +18,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from service.commands._common import SEED, fail, number, writable, write_file
+from service.commands._common import (
+    SEED,
+    fail,
+    number,
+    values_may_look_negative,
+    writable,
+    write_file,
+)
 from tail_check import (
     DEFAULT_PROFILE,
     CameraProfile,
@@ -149,9 +156,8 @@ def _profile_name(text: str) -> str:
     return text
 
 
-# argparse takes "-1,10" for an option and says "expected one argument"; calibrate has no
-# option that looks like a number, so a value starting with "-" and a digit is a value (and
-# a negative coordinate is then refused as outside the image).
+# "-1,10" is a point for --disc (then refused as outside the image): calibrate has no option
+# that looks like a number.
 _NEGATIVE_VALUE = re.compile(r"^-\.?\d")
 
 
@@ -355,7 +361,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     p.add_argument("--name", type=_profile_name, default="calibrated", help="profile name")
     p.add_argument("--out", help="also write the profile to this file (default: print only)")
     p.set_defaults(func=_calibrate)
-    p._negative_number_matcher = _NEGATIVE_VALUE
+    values_may_look_negative(p, _NEGATIVE_VALUE)
 
     p = subparsers.add_parser("tail-study", help="ε(c_Δ) study for box/disk/Gaussian filters")
     p.add_argument("directory", metavar="DIR", help="folder of labelled snapshots")
