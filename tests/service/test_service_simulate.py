@@ -23,8 +23,15 @@ from tests.service.livekit import live_server
 FAST = ["--train-every", "1", "--transit", "1", "--heartbeat-every", "1", "--seed", "7"]
 
 
+POLL_TIMEOUT_S = 30.0
+"""How long one poll of the live server may take: it serves the simulator's fast stream on
+one worker, and under CI's parallel load an answer took longer than httpx's 5 s default
+(a ReadTimeout failed test_simulate_ends_when_the_server_stops once)."""
+
+
 def _runs(url: str) -> list[dict[str, object]]:
-    items: list[dict[str, object]] = httpx.get(f"{url}/api/v1/runs", headers=ADMIN).json()["items"]
+    answer = httpx.get(f"{url}/api/v1/runs", headers=ADMIN, timeout=POLL_TIMEOUT_S)
+    items: list[dict[str, object]] = answer.json()["items"]
     return items
 
 
