@@ -5,7 +5,9 @@ false ``present``: one letter is a round, filled, red region, and the learned ve
 describe only the region and its rings, so they can believe it too (generator A's
 randomised validation seed 201436: the Ø ending the word "RRBØ", disc score 1.00 and
 every verifier above its threshold). What tells a letter is its neighbours: another
-region of *the same paint*, about as tall, on the same line, a letter-gap away. A tail
+region of *the same paint*, about as tall, on the same line, a letter-gap away, or
+a row of them (shorter or thinner letters too) a word space away; worn or shaded
+letters of that ink are darker, but still farther from the body's colour than from the paint. A tail
 disc has no such neighbour (a body stripe is far wider than tall; a buffer or lamp is
 not the disc's paint or not beside it at the same height).
 
@@ -40,6 +42,11 @@ class LetteringParams:
         change it more than the hue) is within this distance of the paint: the median
         colour of the box's most colourful pixels ...
     lightness_weight : weight of the lightness difference in that distance.
+    shade_distance, shade_margin : worn or shaded letters of the same ink are darker
+        (0.7 of the brightness is a CIELAB distance of about 27): a pixel within
+        ``shade_distance`` of the paint is of its ink too when it is at least
+        ``shade_margin`` times as far from the body's colour (the median of the window
+        above and below the box's line), so a body of nearly the paint never is.
     chroma_share : ... and its chroma is at least this share of the paint's (a dark or
         grey surround is never taken for dim red paint).
     colourful : those pixels are the box's share this large of highest chroma (the
@@ -66,11 +73,21 @@ class LetteringParams:
         are near a red disc's colour without being its ink.
     min_side_px : neighbours (and boxes) smaller than this are not judged: at a few
         pixels paint and noise cannot be told apart.
+    row_gap : a *row* of letters may stand farther off: a chain of letter-like regions
+        on the box's line, each at most this many box heights from the previous one
+        (the first from the box), counts when it holds ``row_members`` regions or more
+        (words are a space apart; a lone region that far off may be anything).
+    row_members : the fewest regions of such a row.
+    row_height_ratio : a row's regions may be shorter than a lone neighbour (smaller
+        lettering beside a big digit, lower-case letters) ...
+    row_width_range : ... and narrower (the strokes I, 1, l), in their own heights.
     """
 
     reach: float = 3.0
     paint_distance: float = 14.0
     lightness_weight: float = 0.5
+    shade_distance: float = 30.0
+    shade_margin: float = 2.0
     chroma_share: float = 0.5
     colourful: float = 0.3
     height_ratio: tuple[float, float] = (0.65, 1.45)
@@ -83,6 +100,10 @@ class LetteringParams:
     ring: float = 0.25
     ring_share: float = 0.4
     min_side_px: int = 6
+    row_gap: float = 1.6
+    row_members: int = 2
+    row_height_ratio: tuple[float, float] = (0.4, 1.45)
+    row_width_range: tuple[float, float] = (0.08, 1.6)
 
 
 LETTERING = LetteringParams()
@@ -113,19 +134,60 @@ def _paint_of(region: NDArray[np.float32], share: float) -> NDArray[np.float32]:
     return np.asarray(np.median(pixels[keep], axis=0), np.float32)
 
 
+def _distance2(
+    lab: NDArray[np.float32], colour: NDArray[np.float32], p: LetteringParams
+) -> NDArray[np.float32]:
+    """Squared CIELAB distance (lightness weighted) of each pixel of ``lab`` (h, w, 3)
+    to ``colour`` (3,)."""
+    diff = (lab - colour) * np.array([p.lightness_weight, 1.0, 1.0], np.float32)
+    return np.asarray(np.einsum("ijk,ijk->ij", diff, diff), np.float32)
+
+
 def _paint_masks(
-    lab: NDArray[np.float32], paint: NDArray[np.float32], p: LetteringParams
+    lab: NDArray[np.float32],
+    paint: NDArray[np.float32],
+    body_colour: NDArray[np.float32] | None,
+    p: LetteringParams,
 ) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
     """Pixels of ``lab`` (h, w, 3) of the region's ink (within ``paint_distance`` of
-    ``paint``) and of about its paint (within ``body_distance``), both colourful enough
-    (see the parameters). Squared distances: one pass over the window for both."""
-    weight = np.array([p.lightness_weight, 1.0, 1.0], np.float32)
-    diff = (lab - paint) * weight
-    distance2 = np.einsum("ijk,ijk->ij", diff, diff)
+    ``paint``, or shaded: see ``shade_distance``) and of about its paint (within
+    ``body_distance``), both colourful enough (see the parameters)."""
+    distance2 = _distance2(lab, paint, p)
     colourful = _chroma2(lab) >= p.chroma_share**2 * float(_chroma2(paint))
-    ink = (distance2 <= p.paint_distance**2) & colourful
+    ink = distance2 <= p.paint_distance**2
+    if body_colour is not None:
+        shaded = (distance2 <= p.shade_distance**2) & (
+            _distance2(lab, body_colour, p) >= p.shade_margin**2 * distance2
+        )
+        ink |= shaded
+    ink &= colourful
     body = (distance2 <= p.body_distance**2) & colourful
     return np.asarray(ink, np.uint8), np.asarray(body, np.uint8)
+
+
+Masks = tuple[tuple[int, int], NDArray[np.uint8], NDArray[np.uint8]]
+
+
+def _window_masks(image_bgr: NDArray[np.uint8], box: BBox, p: LetteringParams) -> Masks | None:
+    """The searched window's origin (x0, y0) in the image and its ink and body masks
+    (see :func:`_paint_masks`); None when the body is of about the region's paint (see
+    ``off_line_share``) or the box lies outside the image."""
+    x0, y0, x1, y1 = _window(image_bgr.shape, box, p.reach)
+    lab = cv2.cvtColor(image_bgr[y0:y1, x0:x1], cv2.COLOR_BGR2LAB).astype(np.float32)
+    top, left = box[1] - y0, box[0] - x0
+    rows = slice(max(0, top), top + box[3])
+    region = lab[rows, max(0, left) : left + box[2]]
+    if region.size == 0:
+        return None
+    paint = _paint_of(region, p.colourful)
+    line = np.zeros(lab.shape[0], bool)
+    line[rows] = True
+    off_line = lab[~line]
+    body_colour = np.median(off_line, axis=0).astype(np.float32) if off_line.size else None
+    ink, body = _paint_masks(lab, paint, body_colour, p)
+    if off_line.size and float(body[~line].mean()) > p.off_line_share:
+        return None
+    return (x0, y0), ink, body
 
 
 def row_neighbours(
@@ -146,33 +208,65 @@ def row_neighbours(
     list of (x, y, w, h)
         The neighbours' boxes in image pixels (empty for a region standing alone).
     """
-    x, y, w, h = box
-    if min(w, h) < params.min_side_px:
+    if min(box[2], box[3]) < params.min_side_px:
         return []
-    x0, y0, x1, y1 = _window(image_bgr.shape, box, params.reach)
-    crop = image_bgr[y0:y1, x0:x1]
-    lab = cv2.cvtColor(crop, cv2.COLOR_BGR2LAB).astype(np.float32)
-    local = (x - x0, y - y0, w, h)  # the box in window pixels
-    rows = slice(max(0, local[1]), local[1] + h)
-    region = lab[rows, max(0, local[0]) : local[0] + w]
-    if region.size == 0:
+    window = _window_masks(image_bgr, box, params)
+    if window is None:
         return []
-    paint = _paint_of(region, params.colourful)
-    line = np.zeros(lab.shape[0], bool)
-    line[rows] = True
-    mask, body = _paint_masks(lab, paint, params)
-    if (~line).any() and float(body[~line].mean()) > params.off_line_share:
-        return []
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-    found: list[BBox] = []
+    (x0, y0), mask, body = window
+    local = (box[0] - x0, box[1] - y0, box[2], box[3])  # the box in window pixels
+    n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    members: list[BBox] = []  # letter-shaped regions of the paint on the box's line
+    near: list[BBox] = []  # ... of them, those that make a letter of the box alone
     for k in range(1, n):
         bx, by, bw, bh, area = (int(v) for v in stats[k])
         other = (bx + x0, by + y0, bw, bh)
-        if _is_letter_beside(box, other, area, params) and _isolated(
-            body, (bx, by, bw, bh), local, params
-        ):
-            found.append(other)
-    return found
+        if _on_line(box, other, area, params) and _isolated(body, (bx, by, bw, bh), local, params):
+            members.append(other)
+            if _is_letter_beside(box, other, area, params):
+                near.append(other)
+    if near:
+        return near
+    row = _row(box, members, params)
+    return row if len(row) >= params.row_members else []
+
+
+def _gap(box: BBox, other: BBox) -> int:
+    """Horizontal pixels between two boxes (negative when they overlap)."""
+    return max(other[0] - (box[0] + box[2]), box[0] - (other[0] + other[2]))
+
+
+def _row(box: BBox, members: list[BBox], p: LetteringParams) -> list[BBox]:
+    """The chain of ``members`` reaching the box on either side, each at most
+    ``row_gap`` box heights from the previous one (the first from the box)."""
+    reach = p.row_gap * box[3]
+    chain: list[BBox] = []
+    for side in (1, -1):
+        edge = box[0] + box[2] if side > 0 else box[0]  # the chain's far end so far
+        ahead = sorted(
+            (m for m in members if _gap(box, m) >= 0 and (m[0] > box[0]) == (side > 0)),
+            key=lambda m: side * m[0],
+        )
+        for m in ahead:
+            near_edge, far_edge = (m[0], m[0] + m[2]) if side > 0 else (m[0] + m[2], m[0])
+            if side * (near_edge - edge) > reach:
+                break
+            chain.append(m)
+            edge = far_edge if side * (far_edge - edge) > 0 else edge
+    return chain
+
+
+def _on_line(box: BBox, other: BBox, area: int, p: LetteringParams) -> bool:
+    """Whether ``other`` (with ``area`` pixels) is shaped like a letter of a row on the
+    box's line (a looser test than :func:`_is_letter_beside`'s)."""
+    x, y, w, h = box
+    ox, oy, ow, oh = other
+    if oh < p.min_side_px or not p.row_height_ratio[0] <= oh / h <= p.row_height_ratio[1]:
+        return False
+    if not p.row_width_range[0] * oh <= ow <= p.row_width_range[1] * oh:
+        return False
+    shared = min(y + h, oy + oh) - max(y, oy)
+    return area >= p.min_fill * ow * oh and shared >= p.overlap * min(h, oh)
 
 
 def _isolated(body: NDArray[np.uint8], other: BBox, box: BBox, p: LetteringParams) -> bool:
@@ -204,9 +298,8 @@ def _is_letter_beside(box: BBox, other: BBox, area: int, p: LetteringParams) -> 
     shared = min(y + h, oy + oh) - max(y, oy)
     if shared < p.overlap * min(h, oh):
         return False
-    gap = max(ox - (x + w), x - (ox + ow))
     # A component overlapping the box itself (gap < 0) is the region or its own paint.
-    return 0 <= gap <= p.gap * h
+    return 0 <= _gap(box, other) <= p.gap * h
 
 
 def lettering_reason(
