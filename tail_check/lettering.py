@@ -5,11 +5,11 @@ false ``present``: one letter is a round, filled, red region, and the learned ve
 describe only the region and its rings, so they can believe it too (generator A's
 randomised validation seed 201436: the Ø ending the word "RRBØ", disc score 1.00 and
 every verifier above its threshold). What tells a letter is its neighbours: another
-region of *the same paint*, about as tall, on the same line, a letter-gap away, or
-a row of them (shorter or thinner letters too) a word space away; worn or shaded
-letters of that ink are darker, but still farther from the body's colour than from the paint. A tail
-disc has no such neighbour (a body stripe is far wider than tall; a buffer or lamp is
-not the disc's paint or not beside it at the same height).
+region of *the same paint*, about as tall, on the same line, a letter-gap away, or a
+row of them (shorter or thinner letters too) a word space away; worn or shaded letters
+of that ink are darker, but still farther from the body's colour than from the paint.
+A tail disc has no such neighbour (a body stripe is far wider than tall; a buffer or
+lamp is not the disc's paint or not beside it at the same height).
 
 :func:`lettering_reason` looks for such neighbours next to a ``present`` box and gives
 the reason to hold it ``uncertain``. It only ever leans towards safety.
