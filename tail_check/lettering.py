@@ -73,6 +73,9 @@ class LetteringParams:
         are near a red disc's colour without being its ink.
     min_side_px : neighbours (and boxes) smaller than this are not judged: at a few
         pixels paint and noise cannot be told apart.
+    work_height : the window is judged at a scale where the box is at most this many
+        pixels tall (letters keep their shapes; a 1080p close-up's window would be a
+        quarter of a million pixels), the pixel sizes above at that scale.
     row_gap : a *row* of letters may stand farther off: a chain of letter-like regions
         on the box's line, each at most this many box heights from the previous one
         (the first from the box), counts when it holds ``row_members`` regions or more
@@ -100,6 +103,7 @@ class LetteringParams:
     ring: float = 0.25
     ring_share: float = 0.4
     min_side_px: int = 6
+    work_height: int = 48
     row_gap: float = 1.6
     row_members: int = 2
     row_height_ratio: tuple[float, float] = (0.4, 1.45)
@@ -165,18 +169,26 @@ def _paint_masks(
     return np.asarray(ink, np.uint8), np.asarray(body, np.uint8)
 
 
-Masks = tuple[tuple[int, int], NDArray[np.uint8], NDArray[np.uint8]]
+Masks = tuple[tuple[int, int, float], BBox, NDArray[np.uint8], NDArray[np.uint8]]
 
 
 def _window_masks(image_bgr: NDArray[np.uint8], box: BBox, p: LetteringParams) -> Masks | None:
-    """The searched window's origin (x0, y0) in the image and its ink and body masks
-    (see :func:`_paint_masks`); None when the body is of about the region's paint (see
-    ``off_line_share``) or the box lies outside the image."""
+    """The searched window's origin (x0, y0) in the image and its scale (see
+    ``work_height``), the box in the window's pixels, and the window's ink and body
+    masks (see :func:`_paint_masks`); None when the body is of about the region's paint
+    (see ``off_line_share``) or the box lies outside the image."""
     x0, y0, x1, y1 = _window(image_bgr.shape, box, p.reach)
-    lab = cv2.cvtColor(image_bgr[y0:y1, x0:x1], cv2.COLOR_BGR2LAB).astype(np.float32)
-    top, left = box[1] - y0, box[0] - x0
-    rows = slice(max(0, top), top + box[3])
-    region = lab[rows, max(0, left) : left + box[2]]
+    crop: NDArray[np.uint8] = image_bgr[y0:y1, x0:x1]
+    scale = min(1.0, p.work_height / box[3])
+    if scale < 1.0:
+        crop = np.asarray(
+            cv2.resize(crop, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA), np.uint8
+        )
+    lab = cv2.cvtColor(crop, cv2.COLOR_BGR2LAB).astype(np.float32)
+    x, y, w, h = (box[0] - x0) * scale, (box[1] - y0) * scale, box[2] * scale, box[3] * scale
+    local = (int(round(x)), int(round(y)), max(1, int(round(w))), max(1, int(round(h))))
+    rows = slice(local[1], local[1] + local[3])
+    region = lab[rows, local[0] : local[0] + local[2]]
     if region.size == 0:
         return None
     paint = _paint_of(region, p.colourful)
@@ -187,7 +199,7 @@ def _window_masks(image_bgr: NDArray[np.uint8], box: BBox, p: LetteringParams) -
     ink, body = _paint_masks(lab, paint, body_colour, p)
     if off_line.size and float(body[~line].mean()) > p.off_line_share:
         return None
-    return (x0, y0), ink, body
+    return (x0, y0, scale), local, ink, body
 
 
 def row_neighbours(
@@ -213,22 +225,24 @@ def row_neighbours(
     window = _window_masks(image_bgr, box, params)
     if window is None:
         return []
-    (x0, y0), mask, body = window
-    local = (box[0] - x0, box[1] - y0, box[2], box[3])  # the box in window pixels
+    (x0, y0, scale), local, mask, body = window
     n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     members: list[BBox] = []  # letter-shaped regions of the paint on the box's line
     near: list[BBox] = []  # ... of them, those that make a letter of the box alone
     for k in range(1, n):
         bx, by, bw, bh, area = (int(v) for v in stats[k])
-        other = (bx + x0, by + y0, bw, bh)
-        if _on_line(box, other, area, params) and _isolated(body, (bx, by, bw, bh), local, params):
+        other = (bx, by, bw, bh)
+        if _on_line(local, other, area, params) and _isolated(body, other, local, params):
             members.append(other)
-            if _is_letter_beside(box, other, area, params):
+            if _is_letter_beside(local, other, area, params):
                 near.append(other)
-    if near:
-        return near
-    row = _row(box, members, params)
-    return row if len(row) >= params.row_members else []
+    found = near or _row(local, members, params)
+    if not near and len(found) < params.row_members:
+        return []
+    return [
+        (x0 + round(bx / scale), y0 + round(by / scale), round(bw / scale), round(bh / scale))
+        for bx, by, bw, bh in found
+    ]
 
 
 def _gap(box: BBox, other: BBox) -> int:
