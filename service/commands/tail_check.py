@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import json
 import os
 import re
@@ -17,7 +18,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from PIL import Image, UnidentifiedImageError
 
+from core.settings import get_settings
 from service.commands._common import (
     SEED,
     fail,
@@ -70,12 +73,37 @@ def _decoders_quiet() -> Iterator[None]:
 
 
 def _read_bytes(path: str) -> bytes:
+    """The file's bytes, once its header declares no more pixels than the service takes."""
     try:
-        return Path(path).read_bytes()
+        data = Path(path).read_bytes()
     except OSError as exc:
         raise ValueError(
             f"cannot read image {path!r} (missing, or not a JPEG/PNG file: {exc.strerror})"
         ) from None
+    _check_pixels(path, data)
+    return data
+
+
+def _check_pixels(path: str, data: bytes) -> None:
+    """Refuse, from the header alone, an image larger than ``DEPOT_MAX_IMAGE_PIXELS`` (the
+    service's limit): a PNG of a few hundred bytes can declare 30000x30000 pixels, which
+    the decoder would allocate (2.7 GB) before finding the data missing. A header PIL
+    cannot read is left to the decoder's own message."""
+    limit = get_settings().max_image_pixels
+    pil_limit = Image.MAX_IMAGE_PIXELS  # PIL's own bomb check would hide the size
+    Image.MAX_IMAGE_PIXELS = None  # the CLI is one thread (see _decoders_quiet)
+    try:
+        with Image.open(io.BytesIO(data)) as image:
+            width, height = image.size
+    except (UnidentifiedImageError, OSError, SyntaxError, ValueError):
+        return
+    finally:
+        Image.MAX_IMAGE_PIXELS = pil_limit
+    if width * height > limit:
+        raise ValueError(
+            f"image {path!r} is {width}×{height} pixels, over the limit of {limit} pixels"
+            " (DEPOT_MAX_IMAGE_PIXELS, as the service); give a smaller image or raise the limit"
+        )
 
 
 def _unreadable(path: str, exc: UndecodableImage) -> ValueError:
