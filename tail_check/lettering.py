@@ -76,6 +76,12 @@ class LetteringParams:
     work_height : the window is judged at a scale where the box is at most this many
         pixels tall (letters keep their shapes; a 1080p close-up's window would be a
         quarter of a million pixels), the pixel sizes above at that scale.
+    mark_distance : lettering of *another* ink with the region among it (a red Р in a
+        yellow ФОРМА): a pixel is a mark when it is this far from the body's colour and
+        not of the region's ink; a row of ``row_members`` marks of one colour (each
+        within ``mark_spread`` of the nearest's median colour) counts as lettering, a
+        lone mark does not (a lamp or a buffer beside a disc).
+    mark_spread : see ``mark_distance``.
     row_gap : a *row* of letters may stand farther off: a chain of letter-like regions
         on the box's line, each at most this many box heights from the previous one
         (the first from the box), counts when it holds ``row_members`` regions or more
@@ -104,6 +110,8 @@ class LetteringParams:
     ring_share: float = 0.4
     min_side_px: int = 6
     work_height: int = 48
+    mark_distance: float = 40.0
+    mark_spread: float = 20.0
     row_gap: float = 1.6
     row_members: int = 2
     row_height_ratio: tuple[float, float] = (0.4, 1.45)
@@ -169,14 +177,47 @@ def _paint_masks(
     return np.asarray(ink, np.uint8), np.asarray(body, np.uint8)
 
 
-Masks = tuple[tuple[int, int, float], BBox, NDArray[np.uint8], NDArray[np.uint8]]
+def _marks(
+    lab: NDArray[np.float32],
+    body_colour: NDArray[np.float32],
+    ink: NDArray[np.uint8],
+    p: LetteringParams,
+) -> NDArray[np.uint8]:
+    """Pixels far from the body's colour that are not of the region's ink (see
+    ``mark_distance``)."""
+    far = _distance2(lab, body_colour, p) >= p.mark_distance**2
+    return np.asarray(far & (ink == 0), np.uint8)
 
 
-def _window_masks(image_bgr: NDArray[np.uint8], box: BBox, p: LetteringParams) -> Masks | None:
-    """The searched window's origin (x0, y0) in the image and its scale (see
-    ``work_height``), the box in the window's pixels, and the window's ink and body
-    masks (see :func:`_paint_masks`); None when the body is of about the region's paint
-    (see ``off_line_share``) or the box lies outside the image."""
+@dataclass(frozen=True)
+class _Window:
+    """The searched window at its working scale (see ``work_height``).
+
+    ``origin`` is its top-left corner in the image, ``box`` the region in its pixels,
+    ``lab`` its CIELAB pixels (h, w, 3), ``body_colour`` the median colour above and below
+    the region's line (None when there is no such row), ``ink`` and ``body`` the masks of
+    :func:`_paint_masks`."""
+
+    origin: tuple[int, int]
+    scale: float
+    box: BBox
+    lab: NDArray[np.float32]
+    body_colour: NDArray[np.float32] | None
+    ink: NDArray[np.uint8]
+    body: NDArray[np.uint8]
+
+    def to_image(self, found: list[BBox]) -> list[BBox]:
+        """Boxes in the window's pixels as image pixels."""
+        (x0, y0), f = self.origin, self.scale
+        return [
+            (x0 + round(x / f), y0 + round(y / f), round(w / f), round(h / f))
+            for x, y, w, h in found
+        ]
+
+
+def _window_of(image_bgr: NDArray[np.uint8], box: BBox, p: LetteringParams) -> _Window | None:
+    """The window searched around ``box``; None when the body is of about the region's
+    paint (see ``off_line_share``) or the box lies outside the image."""
     x0, y0, x1, y1 = _window(image_bgr.shape, box, p.reach)
     crop: NDArray[np.uint8] = image_bgr[y0:y1, x0:x1]
     scale = min(1.0, p.work_height / box[3])
@@ -194,18 +235,20 @@ def _window_masks(image_bgr: NDArray[np.uint8], box: BBox, p: LetteringParams) -
     paint = _paint_of(region, p.colourful)
     line = np.zeros(lab.shape[0], bool)
     line[rows] = True
-    off_line = lab[~line]
+    off_line = lab[~line].reshape(-1, 3)
     body_colour = np.median(off_line, axis=0).astype(np.float32) if off_line.size else None
     ink, body = _paint_masks(lab, paint, body_colour, p)
     if off_line.size and float(body[~line].mean()) > p.off_line_share:
         return None
-    return (x0, y0, scale), local, ink, body
+    return _Window((x0, y0), scale, local, lab, body_colour, ink, body)
 
 
 def row_neighbours(
     image_bgr: NDArray[np.uint8], box: BBox, *, params: LetteringParams = LETTERING
 ) -> list[BBox]:
-    """Regions of the box's paint beside it on the same line, as letters would be.
+    """Regions beside the box on its line, as the other letters of its lettering would be:
+    of its paint (one a letter gap away, or a row of them a word space away), or a row of
+    one other ink (see the parameters).
 
     Parameters
     ----------
@@ -222,27 +265,63 @@ def row_neighbours(
     """
     if min(box[2], box[3]) < params.min_side_px:
         return []
-    window = _window_masks(image_bgr, box, params)
+    window = _window_of(image_bgr, box, params)
     if window is None:
         return []
-    (x0, y0, scale), local, mask, body = window
-    n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    found = _paint_neighbours(window, params) or _mark_row(window, params)
+    return window.to_image(found)
+
+
+def _components(mask: NDArray[np.uint8]) -> tuple[NDArray[np.int32], list[tuple[BBox, int]]]:
+    """Labels of the mask's 8-connected regions and each region's box and area."""
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    regions = [((int(st[0]), int(st[1]), int(st[2]), int(st[3])), int(st[4])) for st in stats[1:n]]
+    return np.asarray(labels, np.int32), regions
+
+
+def _paint_neighbours(window: _Window, p: LetteringParams) -> list[BBox]:
+    """Regions of the box's ink beside it: those a letter gap away, or else a row."""
+    box = window.box
     members: list[BBox] = []  # letter-shaped regions of the paint on the box's line
     near: list[BBox] = []  # ... of them, those that make a letter of the box alone
-    for k in range(1, n):
-        bx, by, bw, bh, area = (int(v) for v in stats[k])
-        other = (bx, by, bw, bh)
-        if _on_line(local, other, area, params) and _isolated(body, other, local, params):
+    for other, area in _components(window.ink)[1]:
+        if _on_line(box, other, area, p) and _isolated(window.body, other, box, p):
             members.append(other)
-            if _is_letter_beside(local, other, area, params):
+            if _is_letter_beside(box, other, area, p):
                 near.append(other)
-    found = near or _row(local, members, params)
-    if not near and len(found) < params.row_members:
+    if near:
+        return near
+    row = _row(box, members, p)
+    return row if len(row) >= p.row_members else []
+
+
+def _mark_row(window: _Window, p: LetteringParams) -> list[BBox]:
+    """A row of marks of one colour through the box's line (see ``mark_distance``)."""
+    if window.body_colour is None:
         return []
-    return [
-        (x0 + round(bx / scale), y0 + round(by / scale), round(bw / scale), round(bh / scale))
-        for bx, by, bw, bh in found
-    ]
+    marks = _marks(window.lab, window.body_colour, window.ink, p)
+    labels, regions = _components(marks)
+    members, colours = [], {}
+    for k, (other, area) in enumerate(regions, start=1):
+        if not (_on_line(window.box, other, area, p) and _isolated(marks, other, window.box, p)):
+            continue
+        ring = _ring(window.lab.shape[:2], other, window.box, p)
+        if ring is None:
+            continue
+        ya, xa, ring_mask = ring
+        around = window.lab[ya : ya + ring_mask.shape[0], xa : xa + ring_mask.shape[1]][ring_mask]
+        if float(np.sum((np.median(around, axis=0) - window.body_colour) ** 2)) > p.mark_spread**2:
+            continue  # not painted on the body (beside the buffer beam, a lamp's housing)
+        members.append(other)
+        x, y, w, h = other
+        inside = labels[y : y + h, x : x + w] == k
+        colours[other] = np.median(window.lab[y : y + h, x : x + w][inside], axis=0)
+    row = _row(window.box, members, p)
+    if len(row) < p.row_members:
+        return []
+    first = colours[row[0]]
+    spread2 = [float(np.sum((colours[m] - first) ** 2)) for m in row]
+    return row if max(spread2) <= p.mark_spread**2 else []
 
 
 def _gap(box: BBox, other: BBox) -> int:
@@ -283,22 +362,33 @@ def _on_line(box: BBox, other: BBox, area: int, p: LetteringParams) -> bool:
     return area >= p.min_fill * ow * oh and shared >= p.overlap * min(h, oh)
 
 
-def _isolated(body: NDArray[np.uint8], other: BBox, box: BBox, p: LetteringParams) -> bool:
-    """Whether the ring around ``other`` (window pixels) is mostly not of about the paint
-    (``body``), the region's own box left out: a letter is painted on a contrasting body,
-    a body panel between corrugations continues into the next one."""
+def _ring(
+    shape: tuple[int, ...], other: BBox, box: BBox, p: LetteringParams
+) -> tuple[int, int, NDArray[np.bool_]] | None:
+    """The ring ``ring`` heights wide around ``other`` (window pixels), the region's own
+    box left out: its top and left corner and its mask; None when nothing is left."""
     ox, oy, ow, oh = other
     grow = max(1, int(round(p.ring * oh)))
-    wh, ww = body.shape
     xa, ya = max(0, ox - grow), max(0, oy - grow)
-    xb, yb = min(ww, ox + ow + grow), min(wh, oy + oh + grow)
+    xb, yb = min(shape[1], ox + ow + grow), min(shape[0], oy + oh + grow)
     ring = np.ones((yb - ya, xb - xa), bool)
     ring[oy - ya : oy - ya + oh, ox - xa : ox - xa + ow] = False
     bx, by, bw, bh = box
     ring[max(0, by - ya) : max(0, by - ya + bh), max(0, bx - xa) : max(0, bx - xa + bw)] = False
-    if not ring.any():
+    return (ya, xa, ring) if ring.any() else None
+
+
+def _isolated(body: NDArray[np.uint8], other: BBox, box: BBox, p: LetteringParams) -> bool:
+    """Whether the ring around ``other`` (window pixels) is mostly not of about the paint
+    (``body``): a letter is painted on a contrasting body, a body panel between
+    corrugations continues into the next one."""
+    ring = _ring(body.shape, other, box, p)
+    if ring is None:
         return True
-    return float(body[ya:yb, xa:xb][ring].mean()) <= p.ring_share
+    ya, xa, mask = ring
+    return (
+        float(body[ya : ya + mask.shape[0], xa : xa + mask.shape[1]][mask].mean()) <= p.ring_share
+    )
 
 
 def _is_letter_beside(box: BBox, other: BBox, area: int, p: LetteringParams) -> bool:

@@ -245,3 +245,33 @@ def test_a_disc_with_its_paint_far_along_its_line_stands_alone() -> None:
         cv2.circle(image, (x, 330), 4, SIGNAL_RED, -1, cv2.LINE_AA)
     image = _noisy(image, 3)
     assert row_neighbours(image, box) == []
+
+
+YELLOW = (40, 200, 230)
+CREAM = (200, 225, 235)
+
+
+@pytest.mark.parametrize(
+    ("body", "ink"), [((60, 100, 40), YELLOW), (BLUE_GREY, CREAM), ((50, 50, 55), YELLOW)]
+)
+def test_a_red_letter_inside_a_word_of_another_ink_is_held(
+    body: tuple[int, int, int], ink: tuple[int, int, int]
+) -> None:
+    """'ROBOT' with a red O and 'ФОРМА'-like words with one red letter (trial: 9 of 30
+    false ``present``): a row of another ink through the region's line is lettering."""
+    image = _body(body)
+    end = _text(image, "R", (170, 250), paint=ink)
+    bowl_end = _text(image, "O", (end, 250))
+    _text(image, "BOT", (bowl_end, 250), paint=ink)
+    assert _held(image, _bowl_box(image, end, bowl_end))
+
+
+def test_a_disc_beside_one_lamp_and_above_the_buffer_beam_stands_alone() -> None:
+    """One lit lamp beside the disc on its line, the dark buffer beam and a buffer below:
+    marks of another colour, but no row of them."""
+    image = _body()
+    box = _disc(image, (420, 330), 22)
+    cv2.circle(image, (490, 330), 16, CREAM, -1, cv2.LINE_AA)  # a lamp
+    cv2.circle(image, (330, 385), 22, (60, 60, 60), -1)  # a buffer
+    image = _noisy(image, 4)
+    assert row_neighbours(image, box) == []
