@@ -44,8 +44,9 @@ class LetteringParams:
     height_ratio : a neighbour's height is within this range of the box's.
     overlap : the neighbour's and the box's vertical extents share at least this
         fraction of the shorter one (same text line).
-    gap : at most this many box heights between the box and the neighbour (a letter
-        gap; words are a few letter widths apart).
+    gap : at most this many box heights between the box and a lone neighbour (letters of
+        stencilled car lettering stand up to about a letter height apart; the
+        independent trial's "0  1" stood 1.2 apart).
     width_range : a neighbour is as wide as this range of its own heights (a stripe, a
         body panel or a bracket's bar is wider; a post, a pole or a shadow's edge is
         thinner; so are the letters I and 1, which a row has others beside).
@@ -63,6 +64,14 @@ class LetteringParams:
         are near a red disc's colour without being its ink.
     min_side_px : neighbours (and boxes) smaller than this are not judged: at a few
         pixels paint and noise cannot be told apart.
+    dash_height, dash_width, dash_offset, dash_fill : a hyphen or dash is a member of a
+        row too ("1-0", "-0-"): a region this fraction of the box's height tall, this
+        many box heights wide (and wider than tall), its centre at most ``dash_offset``
+        box heights from the box's, filling at least ``dash_fill`` of its bounding box.
+    stroke_edges, stroke_fill : a lone stroke (I, 1) narrower than ``width_range`` a
+        letter gap away counts as a neighbour when its top and bottom are within
+        ``stroke_edges`` box heights of the box's and it fills ``stroke_fill`` of its
+        bounding box ("I0", "01").
     work_height : the window is judged at a scale where the box is at most this many
         pixels tall (letters keep their shapes; a 1080p close-up's window would be a
         quarter of a million pixels), the pixel sizes above at that scale.
@@ -91,7 +100,7 @@ class LetteringParams:
     colourful: float = 0.3
     height_ratio: tuple[float, float] = (0.65, 1.45)
     overlap: float = 0.6
-    gap: float = 0.7
+    gap: float = 1.3
     width_range: tuple[float, float] = (0.35, 1.6)
     min_fill: float = 0.25
     off_line_share: float = 0.25
@@ -100,6 +109,12 @@ class LetteringParams:
     ring_share: float = 0.4
     min_side_px: int = 6
     work_height: int = 48
+    dash_height: tuple[float, float] = (0.12, 0.4)
+    dash_width: tuple[float, float] = (0.25, 1.0)
+    dash_offset: float = 0.25
+    dash_fill: float = 0.6
+    stroke_edges: float = 0.15
+    stroke_fill: float = 0.5
     mark_distance: float = 40.0
     mark_spread: float = 20.0
     row_gap: float = 1.6

@@ -68,9 +68,9 @@ def _paint_neighbours(window: Window, p: LetteringParams) -> list[BBox]:
     members: list[BBox] = []  # letter-shaped regions of the paint on the box's line
     near: list[BBox] = []  # ... of them, those that make a letter of the box alone
     for other, area in _components(window.ink)[1]:
-        if _on_line(box, other, area, p) and _isolated(window.body, other, box, p):
+        if _row_member(box, other, area, p) and _isolated(window.body, other, box, p):
             members.append(other)
-            if _is_letter_beside(box, other, area, p):
+            if _is_letter_beside(box, other, area, p) or _is_stroke_beside(box, other, area, p):
                 near.append(other)
     if near:
         return near
@@ -143,6 +143,39 @@ def _on_line(box: BBox, other: BBox, area: int, p: LetteringParams) -> bool:
         return False
     shared = min(y + h, oy + oh) - max(y, oy)
     return area >= p.min_fill * ow * oh and shared >= p.overlap * min(h, oh)
+
+
+def _row_member(box: BBox, other: BBox, area: int, p: LetteringParams) -> bool:
+    """A letter of a row on the box's line (:func:`_on_line`) or a dash between two."""
+    return _on_line(box, other, area, p) or _is_dash(box, other, area, p)
+
+
+def _is_dash(box: BBox, other: BBox, area: int, p: LetteringParams) -> bool:
+    """Whether ``other`` is a hyphen or dash on the box's line ("1-0", "-0-"): wider than
+    tall, solid, a fraction of the box's height, about its middle (see ``dash_height``)."""
+    x, y, w, h = box
+    ox, oy, ow, oh = other
+    if oh < 2 or ow <= oh or not p.dash_height[0] <= oh / h <= p.dash_height[1]:
+        return False
+    middle = abs((oy + oh / 2) - (y + h / 2)) <= p.dash_offset * h
+    return (
+        middle
+        and p.dash_width[0] * h <= ow <= p.dash_width[1] * h
+        and area >= p.dash_fill * ow * oh
+    )
+
+
+def _is_stroke_beside(box: BBox, other: BBox, area: int, p: LetteringParams) -> bool:
+    """Whether ``other`` is a stroke (I, 1, l) a letter gap from the box that starts and
+    ends where the box does, as letters of one line do (a post or a bracket's bar runs
+    past the disc); see ``stroke_edges``."""
+    x, y, w, h = box
+    ox, oy, ow, oh = other
+    if oh < p.min_side_px or not p.row_width_range[0] * oh <= ow < p.width_range[0] * oh:
+        return False
+    if abs(oy - y) > p.stroke_edges * h or abs(oy + oh - (y + h)) > p.stroke_edges * h:
+        return False
+    return area >= p.stroke_fill * ow * oh and 0 <= _gap(box, other) <= p.gap * h
 
 
 def _ring(

@@ -275,3 +275,44 @@ def test_a_disc_beside_one_lamp_and_above_the_buffer_beam_stands_alone() -> None
     cv2.circle(image, (330, 385), 22, (60, 60, 60), -1)  # a buffer
     image = _noisy(image, 4)
     assert row_neighbours(image, box) == []
+
+
+@pytest.mark.parametrize("text", ["1-0", "-0-"])
+def test_a_round_letter_joined_by_dashes_is_held(text: str) -> None:
+    """'1-0' and '-0-' (independent trial 920210, 920483: false ``present``): a hyphen
+    is a member of the row."""
+    image = _body()
+    start = 200
+    for part in text:
+        end = _text(image, part, (start, 250))
+        if part == "0":
+            bowl = (start, end)
+        start = end + 6
+    assert _held(image, _bowl_box(image, *bowl))
+
+
+def test_a_round_letter_beside_one_stroke_is_held() -> None:
+    """'I0' (trial 920314): one stroke, narrower than a lone neighbour may be, starting
+    and ending where the round letter does."""
+    image = _body()
+    end = _text(image, "I", (200, 250)) + 6
+    bowl_end = _text(image, "0", (end, 250))
+    assert _held(image, _bowl_box(image, end, bowl_end))
+
+
+def test_a_round_letter_a_letter_height_from_its_only_neighbour_is_held() -> None:
+    """'0  D', the D about a letter height away (as the 1 of the trial's 920626)."""
+    image = _body()
+    bowl_end = _text(image, "0", (200, 250))
+    _text(image, "D", (bowl_end + 28, 250))
+    assert _held(image, _bowl_box(image, 190, bowl_end))
+
+
+def test_a_disc_beside_a_post_of_its_paint_stands_alone() -> None:
+    """A red post of the bracket beside the disc runs past it above and below: not a
+    stroke of a letter."""
+    image = _body()
+    box = _disc(image, (420, 300), 22)
+    cv2.rectangle(image, (452, 262), (458, 350), SIGNAL_RED, -1)
+    image = _noisy(image, 5)
+    assert row_neighbours(image, box) == []
