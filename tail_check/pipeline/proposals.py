@@ -192,24 +192,50 @@ def _grey_world(bgr: F32, work: NDArray[np.uint8]) -> F32:
     return np.asarray(bgr * gains[None, None, :], np.float32)
 
 
+def _peaks(diff: F32, size: int, floor: float) -> NDArray[np.int32] | None:
+    """(x, y) of the pixels of ``diff`` (h, w) at or above ``floor`` that are the maximum
+    of their ``size`` x ``size`` square, in row-major order (None: no such pixel).
+
+    The square maximum is taken only over the box of the pixels at or above ``floor``,
+    grown by half the square (the rest of the frame cannot hold a peak): the very
+    values of the whole frame's, as a maximum does not depend on where it is taken and
+    OpenCV's dilation ignores what lies outside the image.
+    """
+    above = diff >= floor
+    bx, by, bw, bh = cv2.boundingRect(above.view(np.uint8))
+    if bw == 0 or bh == 0:
+        return None
+    half = size // 2
+    x0, y0 = max(0, bx - half), max(0, by - half)
+    x1, y1 = min(diff.shape[1], bx + bw + half), min(diff.shape[0], by + bh + half)
+    win = diff[y0:y1, x0:x1]
+    peaks = (win >= cv2.dilate(win, np.ones((size, size), np.uint8))) & above[y0:y1, x0:x1]
+    # OpenCV lists the peaks in numpy's row-major order, tens of times faster.
+    where = cv2.findNonZero(peaks.view(np.uint8))
+    if where is None:
+        return None
+    return np.asarray(where.reshape(-1, 2) + np.array([x0, y0], np.int32), np.int32)
+
+
 def _blobs(m: Maps, c: ProposalParams, lit: bool) -> list[Proposal]:
     """Centre-surround peaks of ``evidence`` (or of ``value`` for lit reflectors)."""
     out: list[Proposal] = []
     source, field = (LIT_SOURCE, m.value) if lit else (0, m.evidence)
     floor = c.min_lit_response if lit else c.min_response
+    means: dict[int, F32] = {}  # one radius's surround is another's centre
     for frac in c.lit_radii if lit else c.blob_radii:
         r = frac * c.work_side
         # Box means (constant time per pixel at any radius) approximate the Gaussians.
         k_in = max(1, int(round(2 * c.centre_sigma * r)) | 1)
         k_out = max(3, int(round(2 * c.surround_sigma * r)) | 1)
-        diff = cv2.blur(field, (k_in, k_in)) - cv2.blur(field, (k_out, k_out))
-        size = max(3, 2 * int(r) + 1)
-        peaks = (diff >= cv2.dilate(diff, np.ones((size, size), np.uint8))) & (diff >= floor)
-        # OpenCV lists the peaks in numpy's row-major order, tens of times faster.
-        where = cv2.findNonZero(peaks.view(np.uint8))
+        for k in (k_in, k_out):
+            if k not in means:
+                means[k] = np.asarray(cv2.blur(field, (k, k)), np.float32)
+        diff = means[k_in] - means[k_out]
+        where = _peaks(diff, max(3, 2 * int(r) + 1), floor)
         if where is None:
             continue
-        xs, ys = where.reshape(-1, 2).T
+        xs, ys = where.T
         strength = diff[ys, xs]
         for i in np.argsort(-strength)[: c.max_blobs]:
             out.append(Proposal(float(xs[i]), float(ys[i]), r, source, float(strength[i])))
