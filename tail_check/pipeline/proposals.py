@@ -23,6 +23,7 @@ Proposals only propose; the verifier decides.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -31,7 +32,7 @@ from numpy.typing import NDArray
 
 from ..colour import band_mask
 from ..labels import label_areas, label_box, label_centroid, label_regions
-from ..pixels import channel_extreme, median_u8, quantile_f32_u8
+from ..pixels import median_u8, quantile_f32_u8
 from ..profile import CameraProfile
 
 __all__ = ["Maps", "Proposal", "ProposalParams", "make_maps", "propose", "region_box"]
@@ -145,10 +146,11 @@ def region_box(p: CameraProfile, width: int, height: int) -> tuple[int, int, int
     return x, y, min(w, width - x), min(h, height - y)
 
 
-def make_maps(
-    image: NDArray[np.uint8], p: CameraProfile, c: ProposalParams = PROPOSAL_PARAMS
-) -> Maps:
-    """Crop the search region, resample to the working scale, low-pass and build the maps."""
+def _working(
+    image: NDArray[np.uint8], p: CameraProfile, c: ProposalParams
+) -> tuple[NDArray[np.uint8], tuple[int, int], float]:
+    """The search region resampled to the working scale and low-passed, its origin in
+    image pixels and the image-to-working scale."""
     height, width = image.shape[:2]
     x, y, w, h = region_box(p, width, height)
     scale = c.work_side / math.sqrt(width * height)
@@ -158,38 +160,64 @@ def make_maps(
     sigma_px = p.sigma * c.work_side
     if sigma_px >= 0.3:
         work = cv2.GaussianBlur(work, (0, 0), sigma_px)
-    work_u8 = np.asarray(work, np.uint8)
+    return np.asarray(work, np.uint8), (x, y), scale
+
+
+def _ratio(num: F32, den: F32) -> F32:
+    """``clip(num / (den + EPS), 0, 1)``, in place of ``num``."""
+    np.divide(num, den + EPS, out=num)
+    return np.asarray(np.clip(num, 0.0, 1.0, out=num), np.float32)
+
+
+def make_maps(
+    image: NDArray[np.uint8], p: CameraProfile, c: ProposalParams = PROPOSAL_PARAMS
+) -> Maps:
+    """Crop the search region, resample to the working scale, low-pass and build the maps.
+
+    Every map is computed on contiguous colour planes (element-wise float32 operations:
+    the same values as on the interleaved image's channels, in a fraction of the time).
+    """
+    work_u8, origin, scale = _working(image, p, c)
     band = band_mask(work_u8, p.reference_rgb, p.c_delta, gain_range=p.gain_range)
-    bgr = np.asarray(work, np.float32)
-    b, g, r = bgr[..., 0], bgr[..., 1], bgr[..., 2]
-    top_u8 = channel_extreme(work_u8, cv2.max)
+    planes_u8 = [np.asarray(ch, np.uint8) for ch in cv2.split(work_u8)]
+    b, g, r = (np.asarray(ch, np.float32) for ch in planes_u8)
+    top_u8 = np.asarray(cv2.max(cv2.max(planes_u8[0], planes_u8[1]), planes_u8[2]), np.uint8)
     top = top_u8.astype(np.float32)
-    redness = np.clip((r - np.maximum(g, b)) / (r + EPS), 0.0, 1.0)
+    redness = _ratio(r - np.maximum(g, b), r)
     chroma = r / (r + g + b + 3 * EPS)
     # Histogram statistics of the uint8 crop: numpy's quantile and median, bit for bit.
     bright = max(c.min_bright, quantile_f32_u8(top_u8, c.bright_quantile) / 255.0)
     value = np.asarray(np.clip(top / (255.0 * bright), 0.0, 1.0), np.float32)
     evidence = np.asarray(redness * np.clip(value / c.value_knee, 0.0, 1.0), np.float32)
-    balanced = _grey_world(bgr, work_u8)
-    wb_top = np.maximum(balanced[..., 1], balanced[..., 0])
-    red_wb = np.clip((balanced[..., 2] - wb_top) / (balanced[..., 2] + EPS), 0.0, 1.0)
+    red_wb = _grey_world_redness((b, g, r), planes_u8)
     layers = (redness, chroma, value, evidence, band, redness**2, red_wb, top >= c.clip_level)
-    stack = np.empty((*redness.shape, 1 + len(layers)), np.float32)
-    stack[..., 0] = 1.0
-    for k, layer in enumerate(layers, start=1):
-        stack[..., k] = layer
+    ones = np.ones_like(redness)
+    stack = cv2.merge([ones, *(np.asarray(layer, np.float32) for layer in layers)])
+    bgr = cv2.merge([b, g, r])
     return Maps(
-        bgr, redness, chroma, value, evidence, band, bright, (x, y), scale, c.work_side, stack
+        np.asarray(bgr, np.float32),
+        redness,
+        chroma,
+        value,
+        evidence,
+        band,
+        bright,
+        origin,
+        scale,
+        c.work_side,
+        np.asarray(stack, np.float32),
     )
 
 
-def _grey_world(bgr: F32, work: NDArray[np.uint8]) -> F32:
-    """The crop white-balanced by the grey-world rule (each channel's median to their
-    mean): a camera's colour cast or a dusk light does not make every surface redder.
-    ``work`` is ``bgr`` as uint8 (its medians come from histograms)."""
-    med = np.array([median_u8(work[..., k]) for k in range(3)], np.float32) + EPS
+def _grey_world_redness(bgr: tuple[F32, F32, F32], work: Sequence[NDArray[np.uint8]]) -> F32:
+    """Redness of the crop white-balanced by the grey-world rule (each channel's median to
+    their mean): a camera's colour cast or a dusk light does not make every surface
+    redder. ``bgr`` are the crop's planes, ``work`` the same as uint8 (its medians come
+    from histograms)."""
+    med = np.array([median_u8(plane) for plane in work], np.float32) + EPS
     gains = (float(med.mean()) / med).astype(np.float32)
-    return np.asarray(bgr * gains[None, None, :], np.float32)
+    b, g, r = (plane * gains[k] for k, plane in enumerate(bgr))
+    return _ratio(r - np.maximum(g, b), r)
 
 
 def _peaks(diff: F32, size: int, floor: float) -> NDArray[np.int32] | None:

@@ -12,6 +12,7 @@ import math
 import cv2
 import numpy as np
 
+from tail_check.colour import band_mask
 from tail_check.pipeline import PIPELINE_PROFILE
 from tail_check.pipeline.proposals import (
     LIT_SOURCE,
@@ -94,6 +95,42 @@ def test_peaks_at_the_border_and_without_any() -> None:
             assert len(xs) == 0
         else:
             assert where.tolist() == np.stack([xs, ys], axis=1).tolist()
+
+
+def _plain_layers(image: np.ndarray, c: ProposalParams) -> list[np.ndarray]:
+    """The stack's layers as first written, on the interleaved float image's channels."""
+    p = PIPELINE_PROFILE
+    scale = c.work_side / math.sqrt(image.shape[0] * image.shape[1])
+    size = (max(8, round(image.shape[1] * scale)), max(8, round(image.shape[0] * scale)))
+    work = cv2.resize(image, size, interpolation=cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR)
+    work = cv2.GaussianBlur(work, (0, 0), p.sigma * c.work_side)
+    bgr = np.asarray(work, np.float32)
+    b, g, r = bgr[..., 0], bgr[..., 1], bgr[..., 2]
+    top = work.max(axis=2).astype(np.float32)
+    redness = np.clip((r - np.maximum(g, b)) / (r + 1.0), 0.0, 1.0)
+    chroma = r / (r + g + b + 3.0)
+    bright = max(c.min_bright, float(np.quantile(top, c.bright_quantile)) / 255.0)
+    value = np.clip(top / (255.0 * bright), 0.0, 1.0)
+    evidence = redness * np.clip(value / c.value_knee, 0.0, 1.0)
+    med = np.array([np.median(work[..., k]) for k in range(3)], np.float32) + 1.0
+    balanced = bgr * (float(med.mean()) / med).astype(np.float32)[None, None, :]
+    wb_top = np.maximum(balanced[..., 1], balanced[..., 0])
+    red_wb = np.clip((balanced[..., 2] - wb_top) / (balanced[..., 2] + 1.0), 0.0, 1.0)
+    band = band_mask(work, p.reference_rgb, p.c_delta, gain_range=p.gain_range)
+    clipped = top >= c.clip_level
+    return [bgr, redness, chroma, value, evidence, band, redness**2, red_wb, clipped]
+
+
+def test_maps_are_the_interleaved_computations() -> None:
+    for image, _ in iter_snapshots(6, 8, size=(960, 540)):
+        m = make_maps(image, PIPELINE_PROFILE)
+        bgr, *layers = _plain_layers(image, PROPOSAL_PARAMS)
+        assert np.array_equal(m.bgr, bgr)
+        assert m.stack.shape == (*m.redness.shape, 9) and np.all(m.stack[..., 0] == 1.0)
+        for k, layer in enumerate(layers, start=1):
+            assert np.array_equal(m.stack[..., k], layer.astype(np.float32)), k
+        named = (m.redness, m.chroma, m.value, m.evidence, m.band)
+        assert all(np.array_equal(a, b) for a, b in zip(named, layers[:5], strict=True))
 
 
 def test_region_proposals_are_those_of_opencvs_statistics() -> None:
