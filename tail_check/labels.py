@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["label_areas", "label_box", "label_regions"]
+__all__ = ["label_areas", "label_box", "label_centroid", "label_regions"]
 
 BBox = tuple[int, int, int, int]
 
@@ -38,3 +38,12 @@ def label_box(labels: NDArray[np.uint16], label: int) -> BBox:
     # A scalar operand, which OpenCV's stubs do not describe.
     x, y, w, h = cv2.boundingRect(cv2.compare(labels, label, cv2.CMP_EQ))  # type: ignore[call-overload]
     return int(x), int(y), int(w), int(h)
+
+
+def label_centroid(labels: NDArray[np.uint16], label: int, box: BBox) -> tuple[float, float]:
+    """Centroid (x, y) of one label inside its bounding box ``box``: the mean of its pixels'
+    coordinates, as OpenCV's statistics give it (integer sums over the area, one rounding)."""
+    x, y, w, h = box
+    ys, xs = np.nonzero(labels[y : y + h, x : x + w] == label)
+    area = len(xs)
+    return (int(xs.sum()) + x * area) / area, (int(ys.sum()) + y * area) / area

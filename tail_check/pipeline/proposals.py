@@ -23,6 +23,7 @@ Proposals only propose; the verifier decides.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -30,7 +31,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..colour import band_mask
-from ..pixels import channel_extreme, median_u8, quantile_f32_u8
+from ..labels import label_areas, label_box, label_centroid, label_regions
+from ..pixels import median_u8, quantile_f32_u8
 from ..profile import CameraProfile
 
 __all__ = ["Maps", "Proposal", "ProposalParams", "make_maps", "propose", "region_box"]
@@ -144,10 +146,11 @@ def region_box(p: CameraProfile, width: int, height: int) -> tuple[int, int, int
     return x, y, min(w, width - x), min(h, height - y)
 
 
-def make_maps(
-    image: NDArray[np.uint8], p: CameraProfile, c: ProposalParams = PROPOSAL_PARAMS
-) -> Maps:
-    """Crop the search region, resample to the working scale, low-pass and build the maps."""
+def _working(
+    image: NDArray[np.uint8], p: CameraProfile, c: ProposalParams
+) -> tuple[NDArray[np.uint8], tuple[int, int], float]:
+    """The search region resampled to the working scale and low-passed, its origin in
+    image pixels and the image-to-working scale."""
     height, width = image.shape[:2]
     x, y, w, h = region_box(p, width, height)
     scale = c.work_side / math.sqrt(width * height)
@@ -157,38 +160,89 @@ def make_maps(
     sigma_px = p.sigma * c.work_side
     if sigma_px >= 0.3:
         work = cv2.GaussianBlur(work, (0, 0), sigma_px)
-    work_u8 = np.asarray(work, np.uint8)
+    return np.asarray(work, np.uint8), (x, y), scale
+
+
+def _ratio(num: F32, den: F32) -> F32:
+    """``clip(num / (den + EPS), 0, 1)``, in place of ``num``."""
+    np.divide(num, den + EPS, out=num)
+    return np.asarray(np.clip(num, 0.0, 1.0, out=num), np.float32)
+
+
+def make_maps(
+    image: NDArray[np.uint8], p: CameraProfile, c: ProposalParams = PROPOSAL_PARAMS
+) -> Maps:
+    """Crop the search region, resample to the working scale, low-pass and build the maps.
+
+    Every map is computed on contiguous colour planes (element-wise float32 operations:
+    the same values as on the interleaved image's channels, in a fraction of the time).
+    """
+    work_u8, origin, scale = _working(image, p, c)
     band = band_mask(work_u8, p.reference_rgb, p.c_delta, gain_range=p.gain_range)
-    bgr = np.asarray(work, np.float32)
-    b, g, r = bgr[..., 0], bgr[..., 1], bgr[..., 2]
-    top_u8 = channel_extreme(work_u8, cv2.max)
+    planes_u8 = [np.asarray(ch, np.uint8) for ch in cv2.split(work_u8)]
+    b, g, r = (np.asarray(ch, np.float32) for ch in planes_u8)
+    top_u8 = np.asarray(cv2.max(cv2.max(planes_u8[0], planes_u8[1]), planes_u8[2]), np.uint8)
     top = top_u8.astype(np.float32)
-    redness = np.clip((r - np.maximum(g, b)) / (r + EPS), 0.0, 1.0)
+    redness = _ratio(r - np.maximum(g, b), r)
     chroma = r / (r + g + b + 3 * EPS)
     # Histogram statistics of the uint8 crop: numpy's quantile and median, bit for bit.
     bright = max(c.min_bright, quantile_f32_u8(top_u8, c.bright_quantile) / 255.0)
     value = np.asarray(np.clip(top / (255.0 * bright), 0.0, 1.0), np.float32)
     evidence = np.asarray(redness * np.clip(value / c.value_knee, 0.0, 1.0), np.float32)
-    balanced = _grey_world(bgr, work_u8)
-    wb_top = np.maximum(balanced[..., 1], balanced[..., 0])
-    red_wb = np.clip((balanced[..., 2] - wb_top) / (balanced[..., 2] + EPS), 0.0, 1.0)
+    red_wb = _grey_world_redness((b, g, r), planes_u8)
     layers = (redness, chroma, value, evidence, band, redness**2, red_wb, top >= c.clip_level)
-    stack = np.empty((*redness.shape, 1 + len(layers)), np.float32)
-    stack[..., 0] = 1.0
-    for k, layer in enumerate(layers, start=1):
-        stack[..., k] = layer
+    ones = np.ones_like(redness)
+    stack = cv2.merge([ones, *(np.asarray(layer, np.float32) for layer in layers)])
+    bgr = cv2.merge([b, g, r])
     return Maps(
-        bgr, redness, chroma, value, evidence, band, bright, (x, y), scale, c.work_side, stack
+        np.asarray(bgr, np.float32),
+        redness,
+        chroma,
+        value,
+        evidence,
+        band,
+        bright,
+        origin,
+        scale,
+        c.work_side,
+        np.asarray(stack, np.float32),
     )
 
 
-def _grey_world(bgr: F32, work: NDArray[np.uint8]) -> F32:
-    """The crop white-balanced by the grey-world rule (each channel's median to their
-    mean): a camera's colour cast or a dusk light does not make every surface redder.
-    ``work`` is ``bgr`` as uint8 (its medians come from histograms)."""
-    med = np.array([median_u8(work[..., k]) for k in range(3)], np.float32) + EPS
+def _grey_world_redness(bgr: tuple[F32, F32, F32], work: Sequence[NDArray[np.uint8]]) -> F32:
+    """Redness of the crop white-balanced by the grey-world rule (each channel's median to
+    their mean): a camera's colour cast or a dusk light does not make every surface
+    redder. ``bgr`` are the crop's planes, ``work`` the same as uint8 (its medians come
+    from histograms)."""
+    med = np.array([median_u8(plane) for plane in work], np.float32) + EPS
     gains = (float(med.mean()) / med).astype(np.float32)
-    return np.asarray(bgr * gains[None, None, :], np.float32)
+    b, g, r = (plane * gains[k] for k, plane in enumerate(bgr))
+    return _ratio(r - np.maximum(g, b), r)
+
+
+def _peaks(diff: F32, size: int, floor: float) -> NDArray[np.int32] | None:
+    """(x, y) of the pixels of ``diff`` (h, w) at or above ``floor`` that are the maximum
+    of their ``size`` x ``size`` square, in row-major order (None: no such pixel).
+
+    The square maximum is taken only over the box of the pixels at or above ``floor``,
+    grown by half the square (the rest of the frame cannot hold a peak): the very
+    values of the whole frame's, as a maximum does not depend on where it is taken and
+    OpenCV's dilation ignores what lies outside the image.
+    """
+    above = diff >= floor
+    bx, by, bw, bh = cv2.boundingRect(above.view(np.uint8))
+    if bw == 0 or bh == 0:
+        return None
+    half = size // 2
+    x0, y0 = max(0, bx - half), max(0, by - half)
+    x1, y1 = min(diff.shape[1], bx + bw + half), min(diff.shape[0], by + bh + half)
+    win = diff[y0:y1, x0:x1]
+    peaks = (win >= cv2.dilate(win, np.ones((size, size), np.uint8))) & above[y0:y1, x0:x1]
+    # OpenCV lists the peaks in numpy's row-major order, tens of times faster.
+    where = cv2.findNonZero(peaks.view(np.uint8))
+    if where is None:
+        return None
+    return np.asarray(where.reshape(-1, 2) + np.array([x0, y0], np.int32), np.int32)
 
 
 def _blobs(m: Maps, c: ProposalParams, lit: bool) -> list[Proposal]:
@@ -196,19 +250,20 @@ def _blobs(m: Maps, c: ProposalParams, lit: bool) -> list[Proposal]:
     out: list[Proposal] = []
     source, field = (LIT_SOURCE, m.value) if lit else (0, m.evidence)
     floor = c.min_lit_response if lit else c.min_response
+    means: dict[int, F32] = {}  # one radius's surround is another's centre
     for frac in c.lit_radii if lit else c.blob_radii:
         r = frac * c.work_side
         # Box means (constant time per pixel at any radius) approximate the Gaussians.
         k_in = max(1, int(round(2 * c.centre_sigma * r)) | 1)
         k_out = max(3, int(round(2 * c.surround_sigma * r)) | 1)
-        diff = cv2.blur(field, (k_in, k_in)) - cv2.blur(field, (k_out, k_out))
-        size = max(3, 2 * int(r) + 1)
-        peaks = (diff >= cv2.dilate(diff, np.ones((size, size), np.uint8))) & (diff >= floor)
-        # OpenCV lists the peaks in numpy's row-major order, tens of times faster.
-        where = cv2.findNonZero(peaks.view(np.uint8))
+        for k in (k_in, k_out):
+            if k not in means:
+                means[k] = np.asarray(cv2.blur(field, (k, k)), np.float32)
+        diff = means[k_in] - means[k_out]
+        where = _peaks(diff, max(3, 2 * int(r) + 1), floor)
         if where is None:
             continue
-        xs, ys = where.reshape(-1, 2).T
+        xs, ys = where.T
         strength = diff[ys, xs]
         for i in np.argsort(-strength)[: c.max_blobs]:
             out.append(Proposal(float(xs[i]), float(ys[i]), r, source, float(strength[i])))
@@ -221,14 +276,18 @@ def _regions(m: Maps, c: ProposalParams) -> list[Proposal]:
     masks = [(m.chroma >= cr) & (m.redness >= rd) for cr, rd in c.levels] + [m.band]
     out: list[Proposal] = []
     for level, mask in enumerate(masks, start=1):
-        n, _, stats, cents = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
-        areas = stats[1:n, cv2.CC_STAT_AREA]
+        # OpenCV's labels without its statistics (ten times the labelling): the areas of
+        # all labels, boxes and centroids of the few kept (the very values it gives).
+        n, labels = label_regions(np.ascontiguousarray(mask).view(np.uint8))
+        # int32, as OpenCV's statistics: numpy's sort may order equal areas by dtype.
+        areas = label_areas(labels, n)[1:].astype(np.int32)
         order = [int(i) + 1 for i in np.argsort(-areas) if amin <= areas[i] <= amax]
         for k in order[: c.max_regions]:
-            bw, bh = float(stats[k, cv2.CC_STAT_WIDTH]), float(stats[k, cv2.CC_STAT_HEIGHT])
+            box = label_box(labels, k)
+            bw, bh = float(box[2]), float(box[3])
             r = 0.25 * (bw + bh)
             if rmin <= r <= rmax:
-                cx, cy = float(cents[k][0]), float(cents[k][1])
+                cx, cy = label_centroid(labels, k, box)
                 out.append(Proposal(cx, cy, r, level, float(areas[k - 1]) / (bw * bh)))
     return out
 

@@ -20,7 +20,7 @@ import tail_check
 from tail_check import DEFAULT_PROFILE, decode_snapshot, detect, detect_snapshot
 from tail_check.colour import TABLE_MIN_PIXELS, band_mask
 from tail_check.detect import detect_reduced
-from tail_check.labels import label_areas, label_box, label_regions
+from tail_check.labels import label_areas, label_box, label_centroid, label_regions
 from tail_check.pixels import median_u8, percentile_u8, quantile_f32_u8, std_u8
 from tail_check.regions import _median_colour
 from tail_check.shape import median
@@ -106,14 +106,18 @@ def test_labels_without_statistics_are_opencvs() -> None:
         h, w = (int(v) for v in rng.integers(5, 200, 2))
         noise = cv2.GaussianBlur(rng.random((h, w)).astype(np.float32), (0, 0), 2.0)
         mask = (noise > float(np.median(noise))).astype(np.uint8)
-        n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
+        n, labels, stats, cents = cv2.connectedComponentsWithStatsWithAlgorithm(
             mask, 8, cv2.CV_16U, cv2.CCL_GRANA
         )
         n2, labels2 = label_regions(mask)
         assert n2 == n and np.array_equal(labels2, labels)
+        # The default algorithm (the statistics' own) gives the very labels too.
+        assert np.array_equal(cv2.connectedComponentsWithStats(mask, connectivity=8)[1], labels)
         assert np.array_equal(label_areas(labels2, n2), stats[:, cv2.CC_STAT_AREA])
         for label in range(1, n):
-            assert label_box(labels2, label) == tuple(int(v) for v in stats[label, :4])
+            box = label_box(labels2, label)
+            assert box == tuple(int(v) for v in stats[label, :4])
+            assert label_centroid(labels2, label, box) == tuple(float(v) for v in cents[label])
 
 
 def test_medians_are_numpys() -> None:
