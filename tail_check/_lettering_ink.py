@@ -163,35 +163,29 @@ def _distance2(
 def _paint_masks(
     lab: NDArray[np.float32],
     paint: NDArray[np.float32],
-    body_colour: NDArray[np.float32] | None,
+    to_body2: NDArray[np.float32] | None,
     p: LetteringParams,
 ) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
     """Pixels of ``lab`` (h, w, 3) of the region's ink (within ``paint_distance`` of
-    ``paint``, or shaded: see ``shade_distance``) and of about its paint (within
-    ``body_distance``), both colourful enough (see the parameters)."""
+    ``paint``, or shaded: see ``shade_distance``; ``to_body2`` is each pixel's squared
+    distance to the body's colour) and of about its paint (within ``body_distance``),
+    both colourful enough (see the parameters)."""
     distance2 = _distance2(lab, paint, p)
     colourful = _chroma2(lab) >= p.chroma_share**2 * float(_chroma2(paint))
     ink = distance2 <= p.paint_distance**2
-    if body_colour is not None:
-        shaded = (distance2 <= p.shade_distance**2) & (
-            _distance2(lab, body_colour, p) >= p.shade_margin**2 * distance2
-        )
-        ink |= shaded
+    if to_body2 is not None:
+        ink |= (distance2 <= p.shade_distance**2) & (to_body2 >= p.shade_margin**2 * distance2)
     ink &= colourful
     body = (distance2 <= p.body_distance**2) & colourful
     return np.asarray(ink, np.uint8), np.asarray(body, np.uint8)
 
 
-def marks_of(
-    lab: NDArray[np.float32],
-    body_colour: NDArray[np.float32],
-    ink: NDArray[np.uint8],
-    p: LetteringParams,
-) -> NDArray[np.uint8]:
-    """Pixels far from the body's colour that are not of the region's ink (see
-    ``mark_distance``)."""
-    far = _distance2(lab, body_colour, p) >= p.mark_distance**2
-    return np.asarray(far & (ink == 0), np.uint8)
+def marks_of(window: Window, p: LetteringParams) -> NDArray[np.uint8] | None:
+    """The window's pixels far from the body's colour that are not of the region's ink
+    (see ``mark_distance``); None when the window has no body colour."""
+    if window.to_body2 is None:
+        return None
+    return np.asarray((window.to_body2 >= p.mark_distance**2) & (window.ink == 0), np.uint8)
 
 
 @dataclass(frozen=True)
@@ -200,14 +194,15 @@ class Window:
 
     ``origin`` is its top-left corner in the image, ``box`` the region in its pixels,
     ``lab`` its CIELAB pixels (h, w, 3), ``body_colour`` the median colour above and below
-    the region's line (None when there is no such row), ``ink`` and ``body`` the masks of
-    :func:`_paint_masks`."""
+    the region's line (None when there is no such row) and ``to_body2`` each pixel's
+    squared distance to it, ``ink`` and ``body`` the masks of :func:`_paint_masks`."""
 
     origin: tuple[int, int]
     scale: float
     box: BBox
     lab: NDArray[np.float32]
     body_colour: NDArray[np.float32] | None
+    to_body2: NDArray[np.float32] | None
     ink: NDArray[np.uint8]
     body: NDArray[np.uint8]
 
@@ -242,7 +237,8 @@ def window_of(image_bgr: NDArray[np.uint8], box: BBox, p: LetteringParams) -> Wi
     line[rows] = True
     off_line = lab[~line].reshape(-1, 3)
     body_colour = np.median(off_line, axis=0).astype(np.float32) if off_line.size else None
-    ink, body = _paint_masks(lab, paint, body_colour, p)
+    to_body2 = None if body_colour is None else _distance2(lab, body_colour, p)
+    ink, body = _paint_masks(lab, paint, to_body2, p)
     if off_line.size and float(body[~line].mean()) > p.off_line_share:
         return None
-    return Window((x0, y0), scale, local, lab, body_colour, ink, body)
+    return Window((x0, y0), scale, local, lab, body_colour, to_body2, ink, body)

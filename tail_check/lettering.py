@@ -68,7 +68,9 @@ def _paint_neighbours(window: Window, p: LetteringParams) -> list[BBox]:
     members: list[BBox] = []  # letter-shaped regions of the paint on the box's line
     near: list[BBox] = []  # ... of them, those that make a letter of the box alone
     for other, area in _components(window.ink)[1]:
-        if _row_member(box, other, area, p) and _isolated(window.body, other, box, p):
+        if _row_member(box, other, area, p) and _isolated(
+            window.body, _ring(window.ink.shape, other, box, p), p
+        ):
             members.append(other)
             if _is_letter_beside(box, other, area, p) or _is_stroke_beside(box, other, area, p):
                 near.append(other)
@@ -80,20 +82,19 @@ def _paint_neighbours(window: Window, p: LetteringParams) -> list[BBox]:
 
 def _mark_row(window: Window, p: LetteringParams) -> list[BBox]:
     """A row of marks of one colour through the box's line (see ``mark_distance``)."""
-    if window.body_colour is None:
+    marks, body_colour = marks_of(window, p), window.body_colour
+    if marks is None or body_colour is None:  # both or neither: no rows off the line
         return []
-    marks = marks_of(window.lab, window.body_colour, window.ink, p)
     labels, regions = _components(marks)
     members, colours = [], {}
     for k, (other, area) in enumerate(regions, start=1):
-        if not (_on_line(window.box, other, area, p) and _isolated(marks, other, window.box, p)):
+        if not _on_line(window.box, other, area, p):
             continue
-        ring = _ring(window.lab.shape[:2], other, window.box, p)
-        if ring is None:
+        ring = _ring(marks.shape, other, window.box, p)
+        if ring is None or not _isolated(marks, ring, p):
             continue
-        ya, xa, ring_mask = ring
-        around = window.lab[ya : ya + ring_mask.shape[0], xa : xa + ring_mask.shape[1]][ring_mask]
-        if float(np.sum((np.median(around, axis=0) - window.body_colour) ** 2)) > p.mark_spread**2:
+        around = window.lab[ring[0]][ring[1]]
+        if float(np.sum((np.median(around, axis=0) - body_colour) ** 2)) > p.mark_spread**2:
             continue  # not painted on the body (beside the buffer beam, a lamp's housing)
         members.append(other)
         x, y, w, h = other
@@ -135,14 +136,19 @@ def _row(box: BBox, members: list[BBox], p: LetteringParams) -> list[BBox]:
 def _on_line(box: BBox, other: BBox, area: int, p: LetteringParams) -> bool:
     """Whether ``other`` (with ``area`` pixels) is shaped like a letter of a row on the
     box's line (a looser test than :func:`_is_letter_beside`'s)."""
-    x, y, w, h = box
-    ox, oy, ow, oh = other
+    h = box[3]
+    ow, oh = other[2], other[3]
     if oh < p.min_side_px or not p.row_height_ratio[0] <= oh / h <= p.row_height_ratio[1]:
         return False
     if not p.row_width_range[0] * oh <= ow <= p.row_width_range[1] * oh:
         return False
-    shared = min(y + h, oy + oh) - max(y, oy)
-    return area >= p.min_fill * ow * oh and shared >= p.overlap * min(h, oh)
+    return area >= p.min_fill * ow * oh and _same_line(box, other, p)
+
+
+def _same_line(box: BBox, other: BBox, p: LetteringParams) -> bool:
+    """Whether the two vertical extents share ``overlap`` of the shorter one."""
+    shared = min(box[1] + box[3], other[1] + other[3]) - max(box[1], other[1])
+    return shared >= p.overlap * min(box[3], other[3])
 
 
 def _row_member(box: BBox, other: BBox, area: int, p: LetteringParams) -> bool:
@@ -178,11 +184,13 @@ def _is_stroke_beside(box: BBox, other: BBox, area: int, p: LetteringParams) -> 
     return area >= p.stroke_fill * ow * oh and 0 <= _gap(box, other) <= p.gap * h
 
 
-def _ring(
-    shape: tuple[int, ...], other: BBox, box: BBox, p: LetteringParams
-) -> tuple[int, int, NDArray[np.bool_]] | None:
+Ring = tuple[tuple[slice, slice], NDArray[np.bool_]]
+"""A ring around a region: the window's rows and columns it spans, and its mask there."""
+
+
+def _ring(shape: tuple[int, ...], other: BBox, box: BBox, p: LetteringParams) -> Ring | None:
     """The ring ``ring`` heights wide around ``other`` (window pixels), the region's own
-    box left out: its top and left corner and its mask; None when nothing is left."""
+    box left out; None when nothing is left."""
     ox, oy, ow, oh = other
     grow = max(1, int(round(p.ring * oh)))
     xa, ya = max(0, ox - grow), max(0, oy - grow)
@@ -191,32 +199,27 @@ def _ring(
     ring[oy - ya : oy - ya + oh, ox - xa : ox - xa + ow] = False
     bx, by, bw, bh = box
     ring[max(0, by - ya) : max(0, by - ya + bh), max(0, bx - xa) : max(0, bx - xa + bw)] = False
-    return (ya, xa, ring) if ring.any() else None
+    return ((slice(ya, yb), slice(xa, xb)), ring) if ring.any() else None
 
 
-def _isolated(body: NDArray[np.uint8], other: BBox, box: BBox, p: LetteringParams) -> bool:
-    """Whether the ring around ``other`` (window pixels) is mostly not of about the paint
+def _isolated(body: NDArray[np.uint8], ring: Ring | None, p: LetteringParams) -> bool:
+    """Whether the ring around a region (window pixels) is mostly not of about the paint
     (``body``): a letter is painted on a contrasting body, a body panel between
     corrugations continues into the next one."""
-    ring = _ring(body.shape, other, box, p)
     if ring is None:
         return True
-    ya, xa, mask = ring
-    return (
-        float(body[ya : ya + mask.shape[0], xa : xa + mask.shape[1]][mask].mean()) <= p.ring_share
-    )
+    return float(body[ring[0]][ring[1]].mean()) <= p.ring_share
 
 
 def _is_letter_beside(box: BBox, other: BBox, area: int, p: LetteringParams) -> bool:
     """Whether ``other`` (with ``area`` pixels) is a letter-like region beside ``box``."""
-    x, y, w, h = box
-    ox, oy, ow, oh = other
+    h = box[3]
+    ow, oh = other[2], other[3]
     if min(ow, oh) < p.min_side_px or not p.height_ratio[0] <= oh / h <= p.height_ratio[1]:
         return False
     if not p.width_range[0] * oh <= ow <= p.width_range[1] * oh or area < p.min_fill * ow * oh:
         return False
-    shared = min(y + h, oy + oh) - max(y, oy)
-    if shared < p.overlap * min(h, oh):
+    if not _same_line(box, other, p):
         return False
     # A component overlapping the box itself (gap < 0) is the region or its own paint.
     return 0 <= _gap(box, other) <= p.gap * h
