@@ -7,20 +7,13 @@ from __future__ import annotations
 
 import argparse
 import csv
-import io
 import json
-import os
 import re
-import sys
 from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
-import cv2
 import numpy as np
-from PIL import Image, UnidentifiedImageError
 
-from core.settings import get_settings
 from service.commands._common import (
     SEED,
     fail,
@@ -29,13 +22,13 @@ from service.commands._common import (
     writable,
     write_file,
 )
+from service.commands._image_files import decoders_quiet, read_bytes, read_image, unreadable
 from tail_check import (
     DEFAULT_PROFILE,
     CameraProfile,
     DetectionResult,
     UndecodableImage,
     calibrate,
-    decode_snapshot,
     detect_snapshot,
     load_profile,
 )
@@ -49,77 +42,6 @@ def _profile(path: str | None) -> CameraProfile:
     return DEFAULT_PROFILE if path is None else load_profile(path)
 
 
-@contextmanager
-def _decoders_quiet() -> Iterator[None]:
-    """Silence OpenCV's log and what libjpeg/libpng write to the process's stderr themselves
-    (``Corrupt JPEG data: ...``, ``libpng error: ...``): depot's message says what matters.
-
-    The CLI is one thread; the service (threads) must never swap its stderr like this.
-    """
-    level = cv2.utils.logging.getLogLevel()
-    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
-    sys.stderr.flush()
-    saved = os.dup(2)
-    try:
-        quiet = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(quiet, 2)
-        os.close(quiet)
-        yield
-    finally:
-        sys.stderr.flush()
-        os.dup2(saved, 2)
-        os.close(saved)
-        cv2.utils.logging.setLogLevel(level)
-
-
-def _read_bytes(path: str) -> bytes:
-    """The file's bytes, once its header declares no more pixels than the service takes."""
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise ValueError(
-            f"cannot read image {path!r} (missing, or not a JPEG/PNG file: {exc.strerror})"
-        ) from None
-    _check_pixels(path, data)
-    return data
-
-
-def _check_pixels(path: str, data: bytes) -> None:
-    """Refuse, from the header alone, an image larger than ``DEPOT_MAX_IMAGE_PIXELS`` (the
-    service's limit): a PNG of a few hundred bytes can declare 30000x30000 pixels, which
-    the decoder would allocate (2.7 GB) before finding the data missing. A header PIL
-    cannot read is left to the decoder's own message."""
-    limit = get_settings().max_image_pixels
-    pil_limit = Image.MAX_IMAGE_PIXELS  # PIL's own bomb check would hide the size
-    Image.MAX_IMAGE_PIXELS = None  # the CLI is one thread (see _decoders_quiet)
-    try:
-        with Image.open(io.BytesIO(data)) as image:
-            width, height = image.size
-    except (UnidentifiedImageError, OSError, SyntaxError, ValueError):
-        return
-    finally:
-        Image.MAX_IMAGE_PIXELS = pil_limit
-    if width * height > limit:
-        raise ValueError(
-            f"image {path!r} is {width}×{height} pixels, over the limit of {limit} pixels"
-            " (DEPOT_MAX_IMAGE_PIXELS, as the service); give a smaller image or raise the limit"
-        )
-
-
-def _unreadable(path: str, exc: UndecodableImage) -> ValueError:
-    return ValueError(f"cannot read image {path!r} (not a whole JPEG/PNG file: {exc})")
-
-
-def _read_image(path: str) -> np.ndarray:
-    """The image's pixels as the service decodes them (EXIF orientation ignored)."""
-    data = _read_bytes(path)
-    try:
-        with _decoders_quiet():
-            return decode_snapshot(data)
-    except UndecodableImage as exc:
-        raise _unreadable(path, exc) from None
-
-
 def _judge(path: str, profile: CameraProfile) -> DetectionResult:
     """The service's verdict on the file's bytes: ``detect_snapshot`` (a JPEG decoded at
     reduced size, EXIF orientation ignored, a ``present`` confirmed by the learned verifiers,
@@ -131,12 +53,12 @@ def _judge(path: str, profile: CameraProfile) -> DetectionResult:
     ValueError
         With depot's message: the file cannot be read, decoded or judged.
     """
-    data = _read_bytes(path)
+    data = read_bytes(path)
     try:
-        with _decoders_quiet():
+        with decoders_quiet():
             return detect_snapshot(data, profile)
     except UndecodableImage as exc:
-        raise _unreadable(path, exc) from None
+        raise unreadable(path, exc) from None
     except ValueError as exc:
         raise ValueError(f"cannot judge image {path!r}: {exc}") from None
 
@@ -202,7 +124,7 @@ def _calibrate(args: argparse.Namespace) -> int:
             " (leave it out for the standard signal red)"
         )
     try:
-        profile = calibrate(_read_image(args.image), args.disc, base=base, name=args.name)
+        profile = calibrate(read_image(args.image), args.disc, base=base, name=args.name)
     except ValueError as exc:
         return fail(f"{exc}; give a snapshot with the disc visible and --disc X,Y inside it")
     text = profile.to_json()
@@ -221,7 +143,7 @@ def _study_samples(directory: Path, labels: Path) -> Iterator[StudySample]:
                 raise ValueError(f"labels file lacks column(s) {', '.join(sorted(missing))}")
             if not row["ref_x"] or float(row["s_ref"] or 0) <= 0:
                 continue
-            image = _read_image(str(directory / row["file"]))
+            image = read_image(str(directory / row["file"]))
             point = (int(float(row["ref_x"])), int(float(row["ref_y"])))
             box = (int(row["x"]), int(row["y"]), int(row["w"]), int(row["h"]))
             yield StudySample(image, float(row["s_ref"]), point, box, row.get("condition", ""))

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+import service.commands._image_files as image_files
 import service.commands.tail_check as commands
 from tests.tail_check.tailkit import run_tail_command
 
@@ -37,8 +38,8 @@ def test_an_image_declaring_too_many_pixels_is_refused_before_decoding(
     def never(*_: object, **__: object) -> object:
         raise AssertionError("the bomb was handed to the decoder")
 
-    for name in ("decode_snapshot", "detect_snapshot"):
-        monkeypatch.setattr(commands, name, never)
+    monkeypatch.setattr(image_files, "decode_snapshot", never)
+    monkeypatch.setattr(commands, "detect_snapshot", never)
     bomb = tmp_path / "bomb.png"
     bomb.write_bytes(_png_declaring(30_000, 30_000))
     assert run_tail_command([command[0], str(bomb), *command[1:]]) == 2
