@@ -14,7 +14,15 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["LETTERING", "BBox", "LetteringParams", "Window", "marks_of", "window_of"]
+__all__ = [
+    "LETTERING",
+    "BBox",
+    "LetteringParams",
+    "Window",
+    "chroma2",
+    "marks_of",
+    "window_of",
+]
 
 BBox = tuple[int, int, int, int]
 
@@ -136,7 +144,7 @@ def _window(shape: tuple[int, ...], box: BBox, reach: float) -> tuple[int, int, 
 _NEUTRAL = 128.0  # OpenCV's 8-bit CIELAB stores a* and b* offset by 128
 
 
-def _chroma2(lab: NDArray[np.float32]) -> NDArray[np.float32]:
+def chroma2(lab: NDArray[np.float32]) -> NDArray[np.float32]:
     """Squared chroma of CIELAB pixels (..., 3): no square root, as only order and
     thresholds are asked of it."""
     ab = lab[..., 1:] - np.float32(_NEUTRAL)
@@ -146,8 +154,8 @@ def _chroma2(lab: NDArray[np.float32]) -> NDArray[np.float32]:
 def _paint_of(region: NDArray[np.float32], share: float) -> NDArray[np.float32]:
     """Median CIELAB colour of the ``share`` most colourful pixels of ``region`` (h, w, 3)."""
     pixels = region.reshape(-1, 3)
-    chroma2 = _chroma2(pixels)
-    keep = chroma2 >= np.quantile(chroma2, 1.0 - share)
+    colour2 = chroma2(pixels)
+    keep = colour2 >= np.quantile(colour2, 1.0 - share)
     return np.asarray(np.median(pixels[keep], axis=0), np.float32)
 
 
@@ -171,7 +179,7 @@ def _paint_masks(
     distance to the body's colour) and of about its paint (within ``body_distance``),
     both colourful enough (see the parameters)."""
     distance2 = _distance2(lab, paint, p)
-    colourful = _chroma2(lab) >= p.chroma_share**2 * float(_chroma2(paint))
+    colourful = chroma2(lab) >= p.chroma_share**2 * float(chroma2(paint))
     ink = distance2 <= p.paint_distance**2
     if to_body2 is not None:
         ink |= (distance2 <= p.shade_distance**2) & (to_body2 >= p.shade_margin**2 * distance2)

@@ -28,7 +28,9 @@ verdicts, so the other verdicts cost nothing more.
 Before the verifiers, a ``present`` whose region has letter-like neighbours of its own
 paint on its line is held ``uncertain`` (:mod:`tail_check.lettering`): the verifiers
 describe a region and its rings only, and on generator A's randomised validation seeds
-201000-201599 (never used before) all three believed a red Ø ending a word.
+201000-201599 (never used before) all three believed a red Ø ending a word. So is a
+region with lettering inside, a roundel (:mod:`tail_check.emblem`): all three believed
+generator C's "RD" roundel.
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .detect import DetectionResult, detect
+from .emblem import EMBLEM, EmblemParams, emblem_reason
 from .lettering import LETTERING, LetteringParams, lettering_reason
 from .pipeline import PIPELINE_PROFILE, Candidate, TreeModel, load_model
 from .pipeline.candidates import iter_candidates
@@ -69,6 +72,7 @@ class ConfirmParams:
         the region's box grown by this fraction of the box's width and height on each side.
     lettering : what counts as a row of letters beside the region (the ``present`` is
         then held ``uncertain`` before any verifier runs).
+    emblem : what counts as lettering inside the region (a roundel's; held likewise).
     enabled : False returns every result unchanged (for the comparison in
         ``bench.tail_accuracy``, never in the service).
     """
@@ -76,6 +80,7 @@ class ConfirmParams:
     models: tuple[str, ...] = ("AB", "A", "B")
     near: float = 0.5
     lettering: LetteringParams = LETTERING
+    emblem: EmblemParams = EMBLEM
     enabled: bool = True
 
 
@@ -150,13 +155,16 @@ def hold_lettering(
     params: ConfirmParams = CONFIRM_PARAMS,
 ) -> DetectionResult:
     """``result`` unchanged, or its ``present`` held ``uncertain`` when the region stands in
-    a row of letters of its paint (:func:`~.lettering.lettering_reason`); ``image_bgr`` at
+    a row of letters of its paint (:func:`~.lettering.lettering_reason`) or carries
+    lettering inside, as a roundel does (:func:`~.emblem.emblem_reason`); ``image_bgr`` at
     any scale, as in :func:`confirm`."""
     if not _checked(result, params):
         return result
     x0, y0, x1, y1 = _grown(result, image_bgr.shape[1] / max(1, result.image_size[0]), 0.0)
     box = (int(round(x0)), int(round(y0)), int(round(x1 - x0)), int(round(y1 - y0)))
-    reason = lettering_reason(image_bgr, box, params=params.lettering)
+    reason = lettering_reason(image_bgr, box, params=params.lettering) or emblem_reason(
+        image_bgr, box, params=params.emblem
+    )
     if reason is None:
         return result
     return replace(result, verdict="uncertain", reasons=(reason, *result.reasons))

@@ -189,18 +189,12 @@ def _known(generator: str, split: str, offset: int, kind: str, why: str) -> Any:
 
 
 KNOWN_SERVICE_FALSE_PRESENTS = [
-    _known(
-        "C",
-        "heldout",
-        70239,
-        "red_logo",
-        "known false present of the service on generator C's held-out seed 370239 (found"
-        " by python -m bench.tail_accuracy --offset 70000): a round red logo with white letters"
-        " mid-way up a red-brown box car's end wall, 41 px across in an overcast 958x639 scene."
-        " The hand-tuned detector scores it 1.00 and every verifier believes it (AB 0.77, A 0.67,"
-        " B 0.96 above 0.65, 0.57, 0.50): the logos of generators A and B did not teach them."
-        " A disc sits at the buffer beam and is plain red inside; issue 11 stays open on it",
-    ),
+    # Generator C's held-out seed 370239 (found by python -m bench.tail_accuracy --offset
+    # 70000): a round red logo with white letters "RD" mid-way up a red-brown box car's
+    # end wall, 41 px across in an overcast 958x639 scene. The hand-tuned detector scores
+    # it 1.00 and every verifier believes it (AB 0.77, A 0.67, B 0.96 above 0.65, 0.57,
+    # 0.50); the emblem check (lettering inside the region) holds it since stop 34.
+    pytest.param("C", "heldout", 70239, "red_logo", id="C:370239"),
     _known(
         "A",
         "validation",
