@@ -30,7 +30,8 @@ paint on its line is held ``uncertain`` (:mod:`tail_check.lettering`): the verif
 describe a region and its rings only, and on generator A's randomised validation seeds
 201000-201599 (never used before) all three believed a red Ø ending a word. So is a
 region with lettering inside, a roundel (:mod:`tail_check.emblem`): all three believed
-generator C's "RD" roundel.
+generator C's "RD" roundel; and a lens in a lamp's dark housing
+(:mod:`tail_check.housing`).
 """
 
 from __future__ import annotations
@@ -43,6 +44,7 @@ from numpy.typing import NDArray
 
 from .detect import DetectionResult, detect
 from .emblem import EMBLEM, EmblemParams, emblem_reason
+from .housing import HOUSING, HousingParams, housing_reason
 from .lettering import LETTERING, LetteringParams, lettering_reason
 from .pipeline import PIPELINE_PROFILE, Candidate, TreeModel, load_model
 from .pipeline.candidates import iter_candidates
@@ -73,6 +75,7 @@ class ConfirmParams:
     lettering : what counts as a row of letters beside the region (the ``present`` is
         then held ``uncertain`` before any verifier runs).
     emblem : what counts as lettering inside the region (a roundel's; held likewise).
+    housing : what counts as a lamp's housing around the region (held likewise).
     enabled : False returns every result unchanged (for the comparison in
         ``bench.tail_accuracy``, never in the service).
     """
@@ -81,6 +84,7 @@ class ConfirmParams:
     near: float = 0.5
     lettering: LetteringParams = LETTERING
     emblem: EmblemParams = EMBLEM
+    housing: HousingParams = HOUSING
     enabled: bool = True
 
 
@@ -156,14 +160,17 @@ def hold_lettering(
 ) -> DetectionResult:
     """``result`` unchanged, or its ``present`` held ``uncertain`` when the region stands in
     a row of letters of its paint (:func:`~.lettering.lettering_reason`) or carries
-    lettering inside, as a roundel does (:func:`~.emblem.emblem_reason`); ``image_bgr`` at
-    any scale, as in :func:`confirm`."""
+    lettering inside, as a roundel does (:func:`~.emblem.emblem_reason`), or sits in a
+    lamp's housing (:func:`~.housing.housing_reason`); ``image_bgr`` at any scale, as in
+    :func:`confirm`."""
     if not _checked(result, params):
         return result
     x0, y0, x1, y1 = _grown(result, image_bgr.shape[1] / max(1, result.image_size[0]), 0.0)
     box = (int(round(x0)), int(round(y0)), int(round(x1 - x0)), int(round(y1 - y0)))
-    reason = lettering_reason(image_bgr, box, params=params.lettering) or emblem_reason(
-        image_bgr, box, params=params.emblem
+    reason = (
+        lettering_reason(image_bgr, box, params=params.lettering)
+        or emblem_reason(image_bgr, box, params=params.emblem)
+        or housing_reason(image_bgr, box, params=params.housing)
     )
     if reason is None:
         return result

@@ -20,34 +20,15 @@ from tail_check import confirm, detect
 from tail_check.confirm import hold_lettering
 from tail_check.dataset import scenes
 from tail_check.emblem import EmblemParams, emblem_marks, emblem_reason
+from tests.tail_check.drawkit import SIGNAL_RED, WHITE, BBox, end_wall, noisy, tail_disc
 from tests.tail_check.tailkit import hand_presents_on_discs
 
 ROOT = Path(__file__).resolve().parents[2]
-GREY = (128, 124, 120)  # BGR body paint
-SIGNAL_RED = (40, 30, 200)
-WHITE = (235, 235, 235)
-BBox = tuple[int, int, int, int]
 
 
 @pytest.fixture(scope="module", autouse=True)
 def _cache() -> None:
     os.environ.setdefault("DEPOT_TAIL_CACHE", str(ROOT / "var" / "tail_cache"))
-
-
-def _end_wall() -> NDArray[np.uint8]:
-    """A grey car end (800x600) with corrugations, a dark buffer beam and ballast."""
-    image = np.full((600, 800, 3), GREY, np.uint8)
-    for x in range(30, 800, 50):
-        cv2.line(image, (x, 0), (x, 440), (96, 93, 90), 3)
-    image[440:490] = (30, 30, 30)
-    image[490:] = (90, 100, 105)
-    return image
-
-
-def _noisy(image: NDArray[np.uint8], seed: int = 0) -> NDArray[np.uint8]:
-    noise = np.random.default_rng(seed).normal(0.0, 4.0, image.shape)
-    blurred = cv2.GaussianBlur(np.clip(image + noise, 0, 255).astype(np.uint8), (0, 0), 0.8)
-    return np.asarray(blurred, np.uint8)
 
 
 def _roundel(image: NDArray[np.uint8], centre: tuple[int, int], r: int, text: str) -> BBox:
@@ -69,25 +50,13 @@ def _arrow_roundel(image: NDArray[np.uint8], centre: tuple[int, int], r: int) ->
     return cx - r, cy - r, 2 * r, 2 * r
 
 
-def _tail_disc(
-    image: NDArray[np.uint8], centre: tuple[int, int], r: int, reflector: tuple[int, int, int]
-) -> BBox:
-    """A tail disc on its bracket: a dark rim, the red field, a reflector at its centre."""
-    cx, cy = centre
-    cv2.rectangle(image, (cx - 4, cy), (cx + 4, 440), (40, 40, 40), -1)
-    cv2.circle(image, centre, r + 3, (25, 25, 25), -1, cv2.LINE_AA)
-    cv2.circle(image, centre, r, SIGNAL_RED, -1, cv2.LINE_AA)
-    cv2.circle(image, centre, max(3, r // 3), reflector, -1, cv2.LINE_AA)
-    return cx - r, cy - r, 2 * r, 2 * r
-
-
 def test_a_roundel_every_verifier_believes_is_held_uncertain() -> None:
     # A railway's initials on a small roundel just above the buffer beam: before this
     # check the service said ``present`` (disc score 1.00, every verifier above its
     # threshold).
-    image = _end_wall()
+    image = end_wall()
     _roundel(image, (600, 390), 20, "RD")
-    image = _noisy(image)
+    image = noisy(image)
     before = image.copy()
     hand = detect(image)
     assert hand.verdict == "present"  # the error the check exists for
@@ -101,10 +70,10 @@ def test_a_roundel_every_verifier_believes_is_held_uncertain() -> None:
 @pytest.mark.parametrize("text", ["RD", "M", "5", "XK", "arrow"])
 @pytest.mark.parametrize("r", [20, 36, 70])
 def test_lettering_inside_a_roundel_is_found(text: str, r: int) -> None:
-    image = _end_wall()
+    image = end_wall()
     centre = (400, 250)
     box = _arrow_roundel(image, centre, r) if text == "arrow" else _roundel(image, centre, r, text)
-    image = _noisy(image)
+    image = noisy(image)
     assert emblem_reason(image, box) is not None
 
 
@@ -115,36 +84,36 @@ def test_lettering_inside_a_roundel_is_found(text: str, r: int) -> None:
 def test_a_disc_with_its_reflector_at_the_centre_is_not_held(
     reflector: tuple[int, int, int], r: int
 ) -> None:
-    image = _end_wall()
-    box = _tail_disc(image, (600, 440 - r - 12), r, reflector)
-    image = _noisy(image)
+    image = end_wall()
+    box = tail_disc(image, (600, 440 - r - 12), r, reflector)
+    image = noisy(image)
     assert emblem_reason(image, box) is None
     marks = emblem_marks(image, box)
     assert len(marks) <= 1
 
 
 def test_a_disc_under_snowflakes_is_not_held() -> None:
-    image = _end_wall()
-    box = _tail_disc(image, (600, 380), 40, (60, 60, 255))
+    image = end_wall()
+    box = tail_disc(image, (600, 380), 40, (60, 60, 255))
     rng = np.random.default_rng(3)
     for _ in range(400):
         x, y = int(rng.integers(0, 800)), int(rng.integers(0, 600))
         cv2.circle(image, (x, y), int(rng.integers(1, 3)), WHITE, -1, cv2.LINE_AA)
-    image = _noisy(image)
+    image = noisy(image)
     assert emblem_reason(image, box) is None
 
 
 def test_boxes_too_small_to_read_are_not_judged() -> None:
-    image = _end_wall()
+    image = end_wall()
     box = _roundel(image, (400, 250), 36, "RD")
     assert emblem_marks(image, box, params=EmblemParams(min_side_px=73)) == []
     assert emblem_reason(image, (-40, -40, 30, 30)) is None  # outside the image
 
 
 def test_only_a_present_is_held_and_nothing_becomes_present() -> None:
-    image = _end_wall()
+    image = end_wall()
     _roundel(image, (400, 250), 36, "RD")
-    image = _noisy(image)
+    image = noisy(image)
     hand = detect(image)
     for verdict in ("absent", "uncertain"):
         given = replace(hand, verdict=verdict)
