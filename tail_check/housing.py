@@ -37,8 +37,8 @@ class HousingParams:
 
     Attributes
     ----------
-    work_radius : the region is judged at a scale where its radius is at most this many
-        pixels.
+    work_radius : the region is judged at a scale where its radius is this many pixels
+        to twice that (or its own, when smaller).
     min_side_px : boxes smaller than this are not judged.
     rays : directions sampled around the centre.
     start, stop : each ray is sampled from ``start`` to ``stop`` times the region's
@@ -87,10 +87,17 @@ def _lightness_rays(
     crop = image_bgr[y0 : int(cy) + reach, x0 : int(cx) + reach]
     if crop.size == 0:
         return None
-    scale = min(1.0, p.work_radius / radius)
-    if scale < 1.0:
+    # An integer reduction (OpenCV's fast path of INTER_AREA: block means) to a radius
+    # of ``work_radius`` to twice that.
+    factor = max(1, int(radius // p.work_radius))
+    scale = 1.0 / factor
+    if factor > 1:
+        rows, cols = crop.shape[0] // factor, crop.shape[1] // factor
         crop = np.asarray(
-            cv2.resize(crop, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA), np.uint8
+            cv2.resize(
+                crop[: rows * factor, : cols * factor], (cols, rows), interpolation=cv2.INTER_AREA
+            ),
+            np.uint8,
         )
     lab = cv2.cvtColor(np.ascontiguousarray(crop), cv2.COLOR_BGR2LAB).astype(np.float32)
     # A colourful surround is paint (a disc's field around its reflector), never a
@@ -147,15 +154,15 @@ def housing_extent(
     dark = rays <= field - params.darker
     level = float(np.median(rays[dark])) if dark.any() else field
     lighter = rays >= level + params.ends
-    out = np.zeros(rays.shape[0], np.float32)
-    for i in range(rays.shape[0]):
-        # The dark run starts within the rim (its first fifth of a radius) or not at all.
-        starts = np.flatnonzero(dark[i])
-        if starts.size == 0 or radii[starts[0]] > params.start + 0.2:
-            continue
-        after = np.flatnonzero(lighter[i, starts[0] :])
-        out[i] = radii[starts[0] + after[0]] if after.size else np.inf
-    return out
+    # The dark run starts within the rim (its first fifth of a radius) or not at all;
+    # it ends at the first lighter sample after its start.
+    first = np.argmax(dark, axis=1)
+    starts = dark.any(axis=1) & (radii[first] <= params.start + 0.2)
+    columns = np.arange(rays.shape[1])[None, :]
+    after = lighter & (columns >= first[:, None])
+    ended = after.any(axis=1)
+    end = np.where(ended, radii[np.argmax(after, axis=1)], np.float32(np.inf))
+    return np.asarray(np.where(starts, end, np.float32(0.0)), np.float32)
 
 
 def housing_reason(
