@@ -80,8 +80,10 @@ def test_a_disc_with_its_rim_is_not_held(r: int, body: str) -> None:
         image = np.asarray(image * 0.25, np.uint8)
     image = noisy(image)
     assert housing_reason(image, box) is None
-    if body == "grey":  # on a black car the dark surround never ends (inf): no housing
-        assert float(np.median(housing_extent(image, box))) < HousingParams().min_extent
+    if body == "grey":  # on a black car the ring never ends (inf): no housing either
+        extent = housing_extent(image, box)
+        housed = np.isfinite(extent) & (extent >= HousingParams().min_extent)
+        assert float(housed.mean()) < HousingParams().share
 
 
 def test_a_disc_judged_on_its_pale_reflector_is_not_held() -> None:
