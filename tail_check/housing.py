@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._lettering_ink import BBox
+from ._rays import sample_rays
 
 __all__ = ["HOUSING", "HousingParams", "housing_extent", "housing_reason"]
 
@@ -139,19 +140,7 @@ def _sample(
     rays: int,
 ) -> NDArray[np.float32]:
     """CIELAB colours (rays, len(radii), 3) along ``rays`` rays at ``radii`` radii."""
-    angles = np.linspace(0.0, 2.0 * np.pi, rays, endpoint=False)
-    xs = centre[0] + r * radii[None, :] * np.cos(angles)[:, None]
-    ys = centre[1] + r * radii[None, :] * np.sin(angles)[:, None]
-    return np.asarray(
-        cv2.remap(
-            lab,
-            xs.astype(np.float32),
-            ys.astype(np.float32),
-            cv2.INTER_LINEAR,
-            borderMode=cv2.BORDER_REPLICATE,
-        ),
-        np.float32,
-    )
+    return sample_rays(lab, centre, r * radii, rays)
 
 
 def _distance(

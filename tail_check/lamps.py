@@ -18,9 +18,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
+
+from ._rays import sample_rays
 
 __all__ = ["LAMP_CHECK", "LampCheck", "glow_width", "lamp_reason"]
 
@@ -76,20 +77,8 @@ def _ray_profiles(
 ) -> NDArray[np.float32]:
     """Brightness along ``c.rays`` rays from the centre out to ``c.outer`` radii, one row
     per ray, sampled every ``c.step`` pixels (bilinear)."""
-    angles = np.linspace(0.0, 2.0 * np.pi, c.rays, endpoint=False)
     steps = np.arange(0.0, c.outer * radius + c.step, c.step, dtype=np.float32)
-    xs = centre[0] + steps[None, :] * np.cos(angles)[:, None]
-    ys = centre[1] + steps[None, :] * np.sin(angles)[:, None]
-    return np.asarray(
-        cv2.remap(
-            value,
-            xs.astype(np.float32),
-            ys.astype(np.float32),
-            cv2.INTER_LINEAR,
-            borderMode=cv2.BORDER_REPLICATE,
-        ),
-        dtype=np.float32,
-    )
+    return sample_rays(value, centre, steps, c.rays)
 
 
 def glow_width(

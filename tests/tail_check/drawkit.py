@@ -42,3 +42,37 @@ def tail_disc(
     cv2.circle(image, centre, r, SIGNAL_RED, -1, cv2.LINE_AA)
     cv2.circle(image, centre, max(3, r // 3), reflector, -1, cv2.LINE_AA)
     return cx - r, cy - r, 2 * r, 2 * r
+
+
+LENS_RED = (30, 25, 150)  # BGR: an unlit lens, a deeper red than the paint of a disc
+
+
+def roundel(image: NDArray[np.uint8], centre: tuple[int, int], r: int, text: str) -> BBox:
+    cv2.circle(image, centre, r, SIGNAL_RED, -1, cv2.LINE_AA)
+    scale = r / 28.0
+    (tw, th), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, max(2, r // 9))
+    origin = (centre[0] - tw // 2, centre[1] + th // 2)
+    cv2.putText(
+        image, text, origin, cv2.FONT_HERSHEY_SIMPLEX, scale, WHITE, max(2, r // 9), cv2.LINE_AA
+    )
+    return centre[0] - r, centre[1] - r, 2 * r, 2 * r
+
+
+def arrow_roundel(image: NDArray[np.uint8], centre: tuple[int, int], r: int) -> BBox:
+    cv2.circle(image, centre, r, SIGNAL_RED, -1, cv2.LINE_AA)
+    cx, cy = centre
+    tip, tail = (cx + r * 6 // 10, cy), (cx - r * 6 // 10, cy)
+    cv2.arrowedLine(image, tail, tip, WHITE, max(2, r // 7), cv2.LINE_AA, tipLength=0.4)
+    return cx - r, cy - r, 2 * r, 2 * r
+
+
+def lamp(image: NDArray[np.uint8], centre: tuple[int, int], r: int, housing: str) -> BBox:
+    """An unlit lamp: its lens in a dark housing (a ring or a box) 1.6 radii wide."""
+    cx, cy = centre
+    side = int(1.6 * r)
+    if housing == "ring":
+        cv2.circle(image, centre, side, (30, 30, 30), -1, cv2.LINE_AA)
+    else:
+        cv2.rectangle(image, (cx - side, cy - side), (cx + side, cy + side), (35, 35, 35), -1)
+    cv2.circle(image, centre, r, LENS_RED, -1, cv2.LINE_AA)
+    return cx - r, cy - r, 2 * r, 2 * r

@@ -47,3 +47,19 @@ def plain_disc_scene() -> tuple[NDArray[np.uint8], SnapshotLabel]:
     )
     assert label.reference_point == (413, 361)
     return image, label
+
+
+def assert_service_holds(image: NDArray[np.uint8], phrase: str) -> None:
+    """The hand-tuned detector calls ``image`` ``present`` (the error a hold exists for) and
+    the service holds it ``uncertain``, its reason first (containing ``phrase``), the
+    detector's reasons and box kept, the image unmodified."""
+    from tail_check import confirm
+
+    before = image.copy()
+    hand = detect(image)
+    assert hand.verdict == "present"
+    checked = confirm(image, hand)
+    assert checked.verdict == "uncertain"
+    assert phrase in checked.reasons[0]
+    assert checked.reasons[1:] == hand.reasons and checked.bbox == hand.bbox
+    np.testing.assert_array_equal(image, before)
