@@ -47,14 +47,16 @@ def tail_disc(
 LENS_RED = (30, 25, 150)  # BGR: an unlit lens, a deeper red than the paint of a disc
 
 
-def roundel(image: NDArray[np.uint8], centre: tuple[int, int], r: int, text: str) -> BBox:
+def roundel(
+    image: NDArray[np.uint8], centre: tuple[int, int], r: int, text: str, *, bold: bool = False
+) -> BBox:
+    """A red roundel with white lettering (bold: strokes a fifth of the radius wide)."""
     cv2.circle(image, centre, r, SIGNAL_RED, -1, cv2.LINE_AA)
-    scale = r / 28.0
-    (tw, th), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, max(2, r // 9))
+    font = cv2.FONT_HERSHEY_DUPLEX if bold else cv2.FONT_HERSHEY_SIMPLEX
+    scale, stroke = (r / 26.0, max(3, r // 5)) if bold else (r / 28.0, max(2, r // 9))
+    (tw, th), _ = cv2.getTextSize(text, font, scale, stroke)
     origin = (centre[0] - tw // 2, centre[1] + th // 2)
-    cv2.putText(
-        image, text, origin, cv2.FONT_HERSHEY_SIMPLEX, scale, WHITE, max(2, r // 9), cv2.LINE_AA
-    )
+    cv2.putText(image, text, origin, font, scale, WHITE, stroke, cv2.LINE_AA)
     return centre[0] - r, centre[1] - r, 2 * r, 2 * r
 
 

@@ -52,6 +52,16 @@ def test_lettering_inside_a_roundel_is_found(text: str, r: int) -> None:
     assert emblem_reason(image, box) is not None
 
 
+@pytest.mark.parametrize("text", ["5", "R", "P", "W", "M", "3"])
+@pytest.mark.parametrize("r", [20, 36, 60])
+def test_bold_lettering_inside_a_roundel_is_found(text: str, r: int) -> None:
+    # Bold strokes fill their convex hull about as well as a small reflector does
+    # (0.72-0.91); their outline is no ellipse (the independent trial's bold 5, R, P, W).
+    image = end_wall()
+    box = roundel(image, (400, 250), r, text, bold=True)
+    assert emblem_reason(noisy(image), box) is not None
+
+
 @pytest.mark.parametrize(
     "reflector", [(60, 60, 255), (200, 215, 250), (245, 245, 245)], ids=["day", "lit", "white"]
 )
