@@ -62,7 +62,7 @@ from dataclasses import dataclass
 import cv2
 
 from tail_check import DetectionResult, detect
-from tail_check.confirm import CONFIRM_PARAMS, confirm_with, hold_lettering
+from tail_check.confirm import CONFIRM_PARAMS, confirm_with, hold_lookalikes
 from tail_check.dataset import GENERATORS, Sample, real_dir, real_photos, scenes
 from tail_check.evaluate import Tally
 from tail_check.pipeline import (
@@ -89,9 +89,10 @@ class Seen:
     sample: Sample
     candidates: list[Candidate]
     hand: DetectionResult
-    lettered: DetectionResult
-    """``hand`` after the service's lettering check (:func:`~tail_check.confirm.hold_lettering`),
-    which every confirming model set starts from."""
+    held: DetectionResult
+    """``hand`` after the service's holds of lettering, roundels and lamp housings
+    (:func:`~tail_check.confirm.hold_lookalikes`), which every confirming model set starts
+    from."""
 
 
 RANDOMISED_A = "Aw"
@@ -110,7 +111,7 @@ def _seen(samples: list[Sample]) -> list[Seen]:
     for s in samples:
         hand = detect(s.image)
         candidates = find_candidates(s.image, PIPELINE_PROFILE)[0]
-        seen.append(Seen(s, candidates, hand, hold_lettering(s.image, hand)))
+        seen.append(Seen(s, candidates, hand, hold_lookalikes(s.image, hand)))
     return seen
 
 
@@ -123,8 +124,8 @@ def _tally(seen: list[Seen], variant: str, model: str | None) -> Tally:
         if model is None:
             verdict = item.hand.verdict
         elif variant == "confirmed":
-            # the service's rule: lettering held first, then every model must confirm
-            verdict = confirm_with(item.candidates, 1.0, item.lettered, models).verdict
+            # the service's rule: look-alikes held first, then every model must confirm
+            verdict = confirm_with(item.candidates, 1.0, item.held, models).verdict
         else:
             verdict = judge(item.candidates, load_model(model), params, item.hand.verdict)[0]
         out.add(item.sample, verdict)

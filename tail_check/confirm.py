@@ -30,7 +30,7 @@ paint on its line is held ``uncertain`` (:mod:`tail_check.lettering`): the verif
 describe a region and its rings only, and on generator A's randomised validation seeds
 201000-201599 (never used before) all three believed a red Ø ending a word. So is a
 region with lettering inside, a roundel (:mod:`tail_check.emblem`): all three believed
-generator C's "RD" roundel; and a lens in a lamp's dark housing
+generator C's "RD" roundel; and a lens in a lamp's housing
 (:mod:`tail_check.housing`).
 """
 
@@ -57,7 +57,7 @@ __all__ = [
     "confirm",
     "confirm_with",
     "detect_confirmed",
-    "hold_lettering",
+    "hold_lookalikes",
 ]
 
 
@@ -137,7 +137,7 @@ def confirm(
     """
     if not _checked(result, params):
         return result
-    held = hold_lettering(image_bgr, result, params)
+    held = hold_lookalikes(image_bgr, result, params)
     if held is not result:
         return held
     scale = image_bgr.shape[1] / max(1, result.image_size[0])
@@ -153,7 +153,7 @@ def confirm(
     return confirm_with(candidates, scale, result, models, params)
 
 
-def hold_lettering(
+def hold_lookalikes(
     image_bgr: NDArray[np.uint8],
     result: DetectionResult,
     params: ConfirmParams = CONFIRM_PARAMS,

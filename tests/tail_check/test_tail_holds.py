@@ -18,7 +18,7 @@ import pytest
 from numpy.typing import NDArray
 
 from tail_check import detect
-from tail_check.confirm import hold_lettering
+from tail_check.confirm import hold_lookalikes
 from tail_check.dataset import scenes
 from tail_check.emblem import emblem_reason
 from tail_check.housing import housing_reason
@@ -53,10 +53,10 @@ def test_only_a_present_is_held_and_nothing_becomes_present(
     image = scene()
     hand = detect(image)
     assert hand.verdict == "present"
-    assert hold_lettering(image, hand).verdict == "uncertain"
+    assert hold_lookalikes(image, hand).verdict == "uncertain"
     for verdict in ("absent", "uncertain"):
         given = replace(hand, verdict=verdict)
-        assert hold_lettering(image, given) is given
+        assert hold_lookalikes(image, given) is given
 
 
 MEASURED_DISCS_HELD = {"emblem": 0, "housing": 0}

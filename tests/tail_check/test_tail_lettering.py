@@ -18,7 +18,7 @@ import pytest
 from numpy.typing import NDArray
 
 from tail_check import confirm, detect, detect_snapshot
-from tail_check.confirm import hold_lettering
+from tail_check.confirm import hold_lookalikes
 from tail_check.dataset import Sample, scenes
 from tail_check.lettering import LetteringParams, lettering_reason, row_neighbours
 from tests.tail_check.tailkit import hand_presents_on_discs
@@ -111,7 +111,7 @@ def test_only_a_present_is_held_and_nothing_becomes_present() -> None:
     hand = detect(sample.image)
     for verdict in ("absent", "uncertain"):
         given = replace(hand, verdict=verdict)
-        assert hold_lettering(sample.image, given) is given
+        assert hold_lookalikes(sample.image, given) is given
 
 
 def test_red_lettering_every_verifier_believes_is_held_uncertain() -> None:
@@ -142,7 +142,7 @@ def test_true_discs_are_not_taken_for_letters() -> None:
     held = total = 0
     for sample, hand in hand_presents_on_discs(scenes("A", "heldout", 120, offset=40000)):
         total += 1
-        held += hold_lettering(sample.image, hand).verdict == "uncertain"
+        held += hold_lookalikes(sample.image, hand).verdict == "uncertain"
     assert total >= 50
     assert held == MEASURED_DISCS_HELD, (held, total)
 
