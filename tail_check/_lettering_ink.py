@@ -14,6 +14,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from .pixels import clip_window
+
 __all__ = [
     "LETTERING",
     "BBox",
@@ -134,11 +136,11 @@ class LetteringParams:
 LETTERING = LetteringParams()
 
 
-def _window(shape: tuple[int, ...], box: BBox, reach: float) -> tuple[int, int, int, int]:
-    """(x0, y0, x1, y1) of the searched window, clipped to the image."""
+def _window(shape: tuple[int, ...], box: BBox, reach: float) -> tuple[int, int, int, int] | None:
+    """(x0, y0, x1, y1) of the searched window clipped to the image, or None outside it."""
     x, y, w, h = box
     rx, ry = int(math.ceil(reach * h)), int(math.ceil(reach * h / 4))
-    return max(0, x - rx), max(0, y - ry), min(shape[1], x + w + rx), min(shape[0], y + h + ry)
+    return clip_window(shape, x - rx, y - ry, x + w + rx, y + h + ry)
 
 
 _NEUTRAL = 128.0  # OpenCV's 8-bit CIELAB stores a* and b* offset by 128
@@ -226,9 +228,14 @@ class Window:
 def window_of(image_bgr: NDArray[np.uint8], box: BBox, p: LetteringParams) -> Window | None:
     """The window searched around ``box``; None when the body is of about the region's
     paint (see ``off_line_share``) or the box lies outside the image."""
-    x0, y0, x1, y1 = _window(image_bgr.shape, box, p.reach)
+    window = _window(image_bgr.shape, box, p.reach)
+    if window is None or box[3] < 1:
+        return None
+    x0, y0, x1, y1 = window
     crop: NDArray[np.uint8] = image_bgr[y0:y1, x0:x1]
     scale = min(1.0, p.work_height / box[3])
+    if min(crop.shape[:2]) * scale < 1.0:
+        return None  # the working scale leaves no pixel of the window
     if scale < 1.0:
         crop = np.asarray(
             cv2.resize(crop, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA), np.uint8

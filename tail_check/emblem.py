@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._lettering_ink import BBox, chroma2
+from .pixels import clip_window
 
 __all__ = ["EMBLEM", "EmblemParams", "emblem_marks", "emblem_reason"]
 
@@ -99,8 +100,11 @@ def _field_lab(
 ) -> tuple[NDArray[np.float32], NDArray[np.bool_]] | None:
     """The box's CIELAB pixels at the working scale and the mask of its field."""
     x, y, w, h = box
-    x0, y0 = max(0, x), max(0, y)
-    crop = image_bgr[y0 : min(image_bgr.shape[0], y + h), x0 : min(image_bgr.shape[1], x + w)]
+    window = clip_window(image_bgr.shape, x, y, x + w, y + h)
+    if window is None:
+        return None
+    x0, y0, x1, y1 = window
+    crop = image_bgr[y0:y1, x0:x1]
     if crop.shape[0] < p.min_side_px or crop.shape[1] < p.min_side_px:
         return None
     scale = min(1.0, p.work_height / crop.shape[0])

@@ -15,6 +15,7 @@ from .shape import ramp
 
 __all__ = [
     "channel_extreme",
+    "clip_window",
     "median_u8",
     "percentile_u8",
     "quantile_f32_u8",
@@ -22,6 +23,20 @@ __all__ = [
     "subtract_level",
     "veil_level",
 ]
+
+
+def clip_window(
+    shape: tuple[int, ...], x0: int, y0: int, x1: int, y1: int
+) -> tuple[int, int, int, int] | None:
+    """The window ``[x0, x1) x [y0, y1)`` clipped to an image of ``shape`` (rows, cols, ...),
+    or None when none of it lies inside. Clipping both ends keeps a window beyond the top or
+    left edge from turning into a negative slice end, which numpy counts from the far edge."""
+    rows, cols = shape[0], shape[1]
+    x0, x1 = min(max(0, x0), cols), min(max(0, x1), cols)
+    y0, y1 = min(max(0, y0), rows), min(max(0, y1), rows)
+    if x1 <= x0 or y1 <= y0:
+        return None
+    return x0, y0, x1, y1
 
 
 def veil_level(image: NDArray[np.uint8], *, floor: float = 15.0, onset: float = 25.0) -> float:

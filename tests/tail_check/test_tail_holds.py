@@ -22,6 +22,7 @@ from tail_check.confirm import hold_lookalikes
 from tail_check.dataset import scenes
 from tail_check.emblem import emblem_reason
 from tail_check.housing import housing_reason
+from tail_check.lettering import lettering_reason
 from tests.tail_check.drawkit import BBox, end_wall, lamp, noisy, roundel
 from tests.tail_check.tailkit import hand_presents_on_discs
 
@@ -73,3 +74,38 @@ def test_true_discs_are_not_taken_for_roundels_or_lamps() -> None:
             held[name] += reason(sample.image, (x, y, w, h)) is not None
     assert total >= 50
     assert held == MEASURED_DISCS_HELD, (held, total)
+
+
+# Boxes a caller may hand the holds: beyond each edge of the 800x600 scene, straddling a
+# corner, a single pixel, and one so tall that the working scale shrinks it to nothing.
+_OUTSIDE = [
+    (600, -90, 40, 40),
+    (580, -45, 40, 40),
+    (-90, 380, 40, 40),
+    (-220, 370, 40, 40),
+    (900, 380, 40, 40),
+    (600, 700, 40, 40),
+]
+_ODD = [
+    (-20, -20, 40, 40),
+    (790, 590, 40, 40),
+    (600, 390, 1, 1),
+    (600, 0, 1, 600),
+    (600, 590, 40, 20000),
+    (-5000, -5000, 20000, 20000),
+]
+
+
+@pytest.mark.parametrize("box", _OUTSIDE + _ODD, ids=str)
+@pytest.mark.parametrize("scene", [_roundel_scene, _lamp_scene], ids=["roundel", "lamp"])
+def test_a_box_beyond_the_image_is_judged_on_its_own_pixels_only(
+    scene: Callable[[], NDArray[np.uint8]], box: BBox
+) -> None:
+    """A box wholly outside the image has no pixels to hold it by (a negative slice end
+    once wrapped round to the far edge, and found the roundel there); none raises."""
+    image = scene()
+    before = image.copy()
+    reasons = [check(image, box) for check in (emblem_reason, housing_reason, lettering_reason)]
+    np.testing.assert_array_equal(image, before)
+    if box in _OUTSIDE:
+        assert reasons == [None, None, None]
