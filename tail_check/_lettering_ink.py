@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from .pixels import clip_window
+from .pixels import clip_window, median_u8
 
 __all__ = [
     "LETTERING",
@@ -148,9 +148,11 @@ _NEUTRAL = 128.0  # OpenCV's 8-bit CIELAB stores a* and b* offset by 128
 
 def chroma2(lab: NDArray[np.float32]) -> NDArray[np.float32]:
     """Squared chroma of CIELAB pixels (..., 3): no square root, as only order and
-    thresholds are asked of it."""
-    ab = lab[..., 1:] - np.float32(_NEUTRAL)
-    return np.asarray(np.einsum("...k,...k->...", ab, ab), np.float32)
+    thresholds are asked of it. Plane by plane (numpy's einsum over a length-3 axis takes
+    five times as long, for the very same float32 sums)."""
+    a = lab[..., 1] - np.float32(_NEUTRAL)
+    b = lab[..., 2] - np.float32(_NEUTRAL)
+    return np.asarray(a * a + b * b, np.float32)
 
 
 def _paint_of(region: NDArray[np.float32], share: float) -> NDArray[np.float32]:
@@ -165,9 +167,12 @@ def _distance2(
     lab: NDArray[np.float32], colour: NDArray[np.float32], p: LetteringParams
 ) -> NDArray[np.float32]:
     """Squared CIELAB distance (lightness weighted) of each pixel of ``lab`` (h, w, 3)
-    to ``colour`` (3,)."""
-    diff = (lab - colour) * np.array([p.lightness_weight, 1.0, 1.0], np.float32)
-    return np.asarray(np.einsum("ijk,ijk->ij", diff, diff), np.float32)
+    to ``colour`` (3,): on contiguous planes, the same float32 sums as an einsum over
+    the channels in a third of its time."""
+    lightness, a, b = (np.asarray(plane, np.float32) for plane in cv2.split(lab))
+    dl = (lightness - colour[0]) * np.float32(p.lightness_weight)
+    da, db = a - colour[1], b - colour[2]
+    return np.asarray(dl * dl + da * da + db * db, np.float32)
 
 
 def _paint_masks(
@@ -225,6 +230,12 @@ class Window:
         ]
 
 
+def _median_colour(pixels: NDArray[np.uint8]) -> NDArray[np.float32]:
+    """``np.median(pixels.astype(np.float32), axis=0)`` of uint8 pixels (n, 3), bit for bit,
+    from each channel's histogram instead of a partition."""
+    return np.array([median_u8(pixels[:, k]) for k in range(3)], np.float32)
+
+
 def window_of(image_bgr: NDArray[np.uint8], box: BBox, p: LetteringParams) -> Window | None:
     """The window searched around ``box``; None when the body is of about the region's
     paint (see ``off_line_share``) or the box lies outside the image."""
@@ -240,7 +251,8 @@ def window_of(image_bgr: NDArray[np.uint8], box: BBox, p: LetteringParams) -> Wi
         crop = np.asarray(
             cv2.resize(crop, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA), np.uint8
         )
-    lab = cv2.cvtColor(crop, cv2.COLOR_BGR2LAB).astype(np.float32)
+    lab_u8 = np.asarray(cv2.cvtColor(crop, cv2.COLOR_BGR2LAB), np.uint8)
+    lab = lab_u8.astype(np.float32)
     x, y, w, h = (box[0] - x0) * scale, (box[1] - y0) * scale, box[2] * scale, box[3] * scale
     local = (int(round(x)), int(round(y)), max(1, int(round(w))), max(1, int(round(h))))
     rows = slice(local[1], local[1] + local[3])
@@ -250,8 +262,8 @@ def window_of(image_bgr: NDArray[np.uint8], box: BBox, p: LetteringParams) -> Wi
     paint = _paint_of(region, p.colourful)
     line = np.zeros(lab.shape[0], bool)
     line[rows] = True
-    off_line = lab[~line].reshape(-1, 3)
-    body_colour = np.median(off_line, axis=0).astype(np.float32) if off_line.size else None
+    off_line = lab_u8[~line].reshape(-1, 3)
+    body_colour = _median_colour(off_line) if off_line.size else None
     to_body2 = None if body_colour is None else _distance2(lab, body_colour, p)
     ink, body = _paint_masks(lab, paint, to_body2, p)
     if off_line.size and float(body[~line].mean()) > p.off_line_share:
