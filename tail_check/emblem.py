@@ -153,7 +153,8 @@ def emblem_marks(
     if field2.size == 0:
         return []
     keep = field2 >= np.quantile(field2, 1.0 - params.colourful)
-    paint_l, paint_c2 = float(np.median(lab[inside][keep, 0])), float(np.median(field2[keep]))
+    paint_l = float(np.median(lab[..., 0][inside][keep]))
+    paint_c2 = float(np.median(field2[keep]))
     light = (
         inside
         & (lab[..., 0] >= paint_l + params.lighter)
@@ -169,12 +170,12 @@ def emblem_marks(
     half = rows / 2
     marks = []
     for i in range(1, n):
-        w, h, area = (int(v) for v in stats[i, 2:5])
+        x, y, w, h, area = (int(v) for v in stats[i, :5])
         if h < params.min_height * rows:
             continue
         dx = (float(centroids[i, 0]) - (cols - 1) / 2) / half
         dy = (float(centroids[i, 1]) - (rows - 1) / 2) / half
-        mark = labels == i
+        mark = labels[y : y + h, x : x + w] == i  # its own box: the shape measures are local
         marks.append((dx, dy, h / rows, w / h, _solidity(mark, area), _ellipse_iou(mark)))
     return marks
 
