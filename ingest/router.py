@@ -13,6 +13,7 @@ from pydantic import TypeAdapter
 from sqlalchemy.orm import Session
 from starlette.datastructures import UploadFile
 from starlette.requests import ClientDisconnect
+from starlette.types import Message
 
 from core import metrics
 from core.auth import CurrentDevicePrincipal
@@ -53,6 +54,26 @@ EVENT_BODY_DOC = {
         },
     },
 }
+
+
+def bounded(request: Request, limit: int) -> Request:
+    """``request`` with its body cut off at ``limit`` bytes: reading past them raises
+    :class:`PayloadTooLarge`. A declared length is refused before the form is parsed; a
+    chunked upload declares none, and the multipart parser spooled a 1 GB stream to a
+    temporary file before the image's own limit refused it (an independent trial)."""
+    received = 0
+    receive = request.receive
+
+    async def counted() -> Message:
+        nonlocal received
+        message = await receive()
+        if message["type"] == "http.request":
+            received += len(message.get("body", b""))
+            if received > limit:
+                raise PayloadTooLarge(f"the upload exceeds the limit of {limit} bytes")
+        return message
+
+    return Request(request.scope, counted)
 
 
 async def _read_limited(request: Request, limit: int) -> bytes:
@@ -183,12 +204,13 @@ async def post_snapshot(
     if not request.headers.get("content-type", "").startswith("multipart/form-data"):
         raise UnsupportedMediaType("send snapshots as multipart/form-data with an 'image' file")
     declared = request.headers.get("content-length", "")
-    if declared.isdigit() and int(declared) > settings.max_image_bytes + 64 * 1024:
+    limit = settings.max_image_bytes + 64 * 1024  # the image and its form fields
+    if declared.isdigit() and int(declared) > limit:
         raise PayloadTooLarge(
             f"the upload has {declared} bytes; the image limit is {settings.max_image_bytes}"
         )
-    async with request.form(max_files=1, max_fields=10) as form:
-        check_form_fields(form.keys())
+    async with bounded(request, limit).form(max_files=1, max_fields=10) as form:
+        check_form_fields(name for name, _ in form.multi_items())
         upload = form.get("image")
         if not isinstance(upload, UploadFile):
             raise Unprocessable(

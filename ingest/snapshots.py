@@ -13,10 +13,12 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import simplejpeg
 from numpy.typing import NDArray
 from PIL import Image, UnidentifiedImageError
 
 from core.errors import PayloadTooLarge, Unprocessable
+from tail_check import MIN_SIDE
 
 FORMATS = {"JPEG": ("image/jpeg", ".jpg"), "PNG": ("image/png", ".png")}
 SUFFIXES = dict(FORMATS.values())  # content type -> file suffix of the stored image
@@ -39,13 +41,22 @@ FORM_FILE = "image"
 def check_form_fields(names: Iterable[str]) -> None:
     """Refuse (422, naming them) form fields the protocol does not name: an event refuses an
     unknown field, and a field silently dropped (``camera``, a misspelt ``occured_at``) would
-    leave the device's integrator believing it was stored. Missing fields are said elsewhere."""
+    leave the device's integrator believing it was stored. ``names`` holds every part's name,
+    repeats included: a field sent twice is refused too (the form kept the last silently, as
+    a JSON event with a repeated key is refused). Missing fields are said elsewhere."""
+    names = list(names)
     unknown = sorted(set(names) - {*FORM_FIELDS, FORM_FILE})
     if unknown:
         raise Unprocessable(
             f"unknown form field(s) {', '.join(map(repr, unknown))}; a snapshot has the fields"
             f" {', '.join(FORM_FIELDS)} and the file {FORM_FILE} (protocol.md), nothing else",
             errors=[{"loc": ["body", name], "msg": "unknown form field"} for name in unknown],
+        )
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise Unprocessable(
+            f"form field(s) {', '.join(map(repr, repeated))} sent more than once; send each once",
+            errors=[{"loc": ["body", name], "msg": "repeated form field"} for name in repeated],
         )
 
 
@@ -63,6 +74,12 @@ def check_image(data: bytes, *, max_bytes: int, max_pixels: int) -> CheckedImage
         raise Unprocessable("the image file is empty", errors=_field_error("empty file"))
     if len(data) > max_bytes:
         raise PayloadTooLarge(f"the image has {len(data)} bytes; the limit is {max_bytes}")
+    declared = _declared_size(data)
+    if declared is not None and declared[0] * declared[1] > max_pixels:
+        # Before PIL: its own bomb check refuses without saying the size.
+        raise PayloadTooLarge(
+            f"the image is {declared[0]}×{declared[1]} pixels; the limit is {max_pixels} pixels"
+        )
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", Image.DecompressionBombWarning)
@@ -88,11 +105,64 @@ def check_image(data: bytes, *, max_bytes: int, max_pixels: int) -> CheckedImage
             "the file is not a readable JPEG or PNG image", errors=_field_error("not an image")
         ) from None
     except (OSError, SyntaxError, ValueError) as exc:
+        raise _damaged(str(exc)) from None
+    if kind[0] == "image/jpeg":
+        _check_jpeg_data(data)
+    if min(width, height) < MIN_SIDE:
         raise Unprocessable(
-            f"the image is damaged or truncated ({exc}); send the whole file",
-            errors=_field_error("damaged or truncated image"),
-        ) from None
+            f"the image is {width}×{height} pixels; a snapshot must be at least"
+            f" {MIN_SIDE}×{MIN_SIDE} for the tail check to judge it",
+            errors=_field_error("image too small"),
+        )
     return CheckedImage(hashlib.sha256(data).hexdigest(), kind[0], kind[1], width, height)
+
+
+def _declared_size(data: bytes) -> tuple[int, int] | None:
+    """(width, height) a PNG's or JPEG's header declares, None for any other file (or a
+    header too damaged to say): read without decoding, a bomb's size costs nothing."""
+    if data.startswith(b"\x89PNG\r\n\x1a\n") and data[12:16] == b"IHDR":
+        return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+    if data.startswith(b"\xff\xd8"):
+        try:
+            height, width = simplejpeg.decode_jpeg_header(data)[:2]
+        except ValueError:
+            return None
+        return int(width), int(height)
+    return None
+
+
+def _damaged(why: str) -> Unprocessable:
+    return Unprocessable(
+        f"the image is damaged or truncated ({why}); send the whole file",
+        errors=_field_error("damaged or truncated image"),
+    )
+
+
+# The one warning of libjpeg that loses nothing: padding after the last scan, before the end.
+_PADDING = "extraneous bytes before marker 0xd9"
+
+
+def _check_jpeg_data(data: bytes) -> None:
+    """Refuse a JPEG whose compressed data ends early or is corrupt.
+
+    libjpeg only warns when a scan's data runs out and fills the rest of the picture with
+    flat grey (PIL and OpenCV decode it without a word): a JPEG cut short and given its end
+    marker back, or whose header claims more rows than it holds, was judged ``present`` on
+    its upper part and freed a section (an independent trial). libjpeg-turbo's strict mode
+    makes every warning an error; decoding at an eighth of the size still reads every bit
+    of the compressed data, at a small part of a full decode's cost.
+    """
+    try:
+        colourspace = simplejpeg.decode_jpeg_header(data)[2]
+        simplejpeg.decode_jpeg(
+            data,
+            colorspace="CMYK" if colourspace in ("CMYK", "YCCK") else "GRAY",
+            min_factor=8,
+            strict=True,
+        )
+    except ValueError as exc:
+        if _PADDING not in str(exc):
+            raise _damaged(str(exc)) from None
 
 
 def image_path(image_dir: Path, sha256: str, suffix: str) -> Path:

@@ -19,6 +19,7 @@ Public API::
     decode_snapshot(data) -> BGR array (EXIF orientation ignored)
     detect_snapshot(jpeg_bytes, profile=None) -> DetectionResult (JPEG decoded at reduced size)
     CameraProfile, DEFAULT_PROFILE, load_profile
+    MIN_SIDE: fewest pixels across and high of an image the detector judges
     UndecodableImage: the ValueError of the two decoders for bytes that are not a whole
         JPEG/PNG image
 """
@@ -26,7 +27,7 @@ Public API::
 from .calibrate import calibrate
 from .compare import Comparison, compare, compare_with_departure
 from .confirm import ConfirmParams, confirm, detect_confirmed
-from .detect import WORK_SIDE, DetectionResult, Verdict, detect
+from .detect import MIN_SIDE, WORK_SIDE, DetectionResult, Verdict, detect
 from .overlay import overlay_png, render_overlay
 from .profile import DEFAULT_PROFILE, CameraProfile, load_profile
 from .regions import DiscCandidate
@@ -34,6 +35,7 @@ from .snapshot import UndecodableImage, decode_snapshot, detect_snapshot
 
 __all__ = [
     "DEFAULT_PROFILE",
+    "MIN_SIDE",
     "WORK_SIDE",
     "CameraProfile",
     "Comparison",

@@ -106,6 +106,11 @@ class DetectionResult:
         }
 
 
+MIN_SIDE = 16
+"""Fewest pixels across and high of an image the detector judges (the service refuses
+smaller uploads with this figure)."""
+
+
 def check_image(image_bgr: object) -> NDArray[np.uint8]:
     """Validate a BGR snapshot and return it as a uint8 array (no copy when possible).
 
@@ -116,20 +121,20 @@ def check_image(image_bgr: object) -> NDArray[np.uint8]:
     Raises
     ------
     ValueError
-        If it is not an (H, W, 3) image of at least 16×16 pixels with values 0..255.
+        If it is not an (H, W, 3) image of at least MIN_SIDE×MIN_SIDE pixels with values 0..255.
     """
     if not isinstance(image_bgr, np.ndarray):
         raise ValueError(f"image must be a numpy array (BGR), got {type(image_bgr).__name__}")
     if image_bgr.ndim != 3 or image_bgr.shape[2] != 3:
         raise ValueError(f"image must have shape (H, W, 3) in BGR order, got {image_bgr.shape}")
     height, width = image_bgr.shape[:2]
-    if height < 16 or width < 16:
+    if height < MIN_SIDE or width < MIN_SIDE:
         size = f"({width}x{height})"
-        if height >= 16:
-            raise ValueError(f"image is too narrow {size}, need at least 16 pixels across")
-        if width >= 16:
-            raise ValueError(f"image is too short {size}, need at least 16 pixels high")
-        raise ValueError(f"image is too small {size}, need at least 16x16")
+        if height >= MIN_SIDE:
+            raise ValueError(f"image is too narrow {size}, need at least {MIN_SIDE} pixels across")
+        if width >= MIN_SIDE:
+            raise ValueError(f"image is too short {size}, need at least {MIN_SIDE} pixels high")
+        raise ValueError(f"image is too small {size}, need at least {MIN_SIDE}x{MIN_SIDE}")
     if image_bgr.dtype == np.uint8:
         return image_bgr
     real = np.issubdtype(image_bgr.dtype, np.integer) or np.issubdtype(image_bgr.dtype, np.floating)

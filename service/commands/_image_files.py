@@ -4,18 +4,17 @@ decoders' own."""
 
 from __future__ import annotations
 
-import io
 import os
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 
 import cv2
 import numpy as np
-from PIL import Image, UnidentifiedImageError
 
+from core.errors import DepotError, PayloadTooLarge
 from core.settings import get_settings
+from ingest.snapshots import check_image
 from tail_check import UndecodableImage, decode_snapshot
 
 __all__ = ["decoders_quiet", "read_bytes", "read_image", "unreadable"]
@@ -45,37 +44,34 @@ def decoders_quiet() -> Iterator[None]:
 
 
 def read_bytes(path: str) -> bytes:
-    """The file's bytes, once its header declares no more pixels than the service takes."""
+    """The file's bytes, once the service's own check of an upload takes them
+    (:func:`ingest.snapshots.check_image`: JPEG or PNG, whole, within the service's byte and
+    pixel limits, at least 16x16): the CLI judged BMP, GIF and WebP files the service
+    refuses, read a 3 GB file or ``/dev/zero`` whole, and had its own pixel check."""
+    settings = get_settings()
+    limit = settings.max_image_bytes
     try:
-        data = Path(path).read_bytes()
+        with open(path, "rb") as handle:
+            data = handle.read(limit + 1)  # never more than the limit: a device has no size
     except OSError as exc:
         raise ValueError(
             f"cannot read image {path!r} (missing, or not a JPEG/PNG file: {exc.strerror})"
         ) from None
-    _check_pixels(path, data)
-    return data
-
-
-def _check_pixels(path: str, data: bytes) -> None:
-    """Refuse, from the header alone, an image larger than ``DEPOT_MAX_IMAGE_PIXELS`` (the
-    service's limit): a PNG of a few hundred bytes can declare 30000x30000 pixels, which
-    the decoder would allocate (2.7 GB) before finding the data missing. A header PIL
-    cannot read is left to the decoder's own message."""
-    limit = get_settings().max_image_pixels
-    pil_limit = Image.MAX_IMAGE_PIXELS  # PIL's own bomb check would hide the size
-    Image.MAX_IMAGE_PIXELS = None  # the CLI is one thread (see decoders_quiet)
-    try:
-        with Image.open(io.BytesIO(data)) as image:
-            width, height = image.size
-    except (UnidentifiedImageError, OSError, SyntaxError, ValueError):
-        return
-    finally:
-        Image.MAX_IMAGE_PIXELS = pil_limit
-    if width * height > limit:
+    if len(data) > limit:
         raise ValueError(
-            f"image {path!r} is {width}×{height} pixels, over the limit of {limit} pixels"
-            " (DEPOT_MAX_IMAGE_PIXELS, as the service); give a smaller image or raise the limit"
+            f"image {path!r} has more than {limit} bytes, over the limit (DEPOT_MAX_IMAGE_BYTES,"
+            " as the service); give a smaller image or raise the limit"
         )
+    try:
+        check_image(data, max_bytes=limit, max_pixels=settings.max_image_pixels)
+    except PayloadTooLarge as exc:
+        raise ValueError(
+            f"image {path!r} is too large ({exc.detail}; DEPOT_MAX_IMAGE_PIXELS, as the"
+            " service); give a smaller image or raise the limit"
+        ) from None
+    except DepotError as exc:
+        raise ValueError(f"cannot read image {path!r} ({exc.detail})") from None
+    return data
 
 
 def unreadable(path: str, exc: UndecodableImage) -> ValueError:
