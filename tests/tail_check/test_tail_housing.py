@@ -76,3 +76,29 @@ def test_boxes_too_small_or_outside_are_not_judged() -> None:
     image = noisy(end_wall())
     assert housing_extent(image, (600, 300, 8, 8)).size == 0
     assert housing_reason(image, (-400, -400, 40, 40)) is None
+
+
+@pytest.mark.parametrize("housing", ["ring", "box"])
+@pytest.mark.parametrize("r", [22, 40])
+@pytest.mark.parametrize("light", [0.3, 0.15])
+def test_an_unlit_lamp_in_its_housing_is_held_at_night(housing: str, r: int, light: float) -> None:
+    """At night the black housing, the dark lens and the body differ by less than the day's
+    contrasts, and sensor noise ends a ring early: unlit signal lamps in black housings were
+    called discs (the independent trial 4's dev seed 1000105 and fresh seed 2000005)."""
+    image = end_wall()
+    box = lamp(image, (600, BEAM_TOP - int(1.8 * r)), r, housing)
+    image = noisy(np.asarray(image * light, np.uint8))
+    noise = np.random.default_rng(r).normal(0.0, 3.0, image.shape)
+    image = np.clip(image + noise, 0, 255).astype(np.uint8)
+    assert housing_reason(image, box) is not None
+
+
+@pytest.mark.parametrize("r", [22, 40])
+@pytest.mark.parametrize("light", [0.3, 0.15])
+def test_a_disc_with_its_rim_is_not_held_at_night_in_noise(r: int, light: float) -> None:
+    image = end_wall()
+    box = tail_disc(image, (600, BEAM_TOP - r - 12), r, (60, 60, 255))
+    image = noisy(np.asarray(image * light, np.uint8))
+    noise = np.random.default_rng(r).normal(0.0, 3.0, image.shape)
+    image = np.clip(image + noise, 0, 255).astype(np.uint8)
+    assert housing_reason(image, box) is None
