@@ -31,7 +31,7 @@ describe a region and its rings only, and on generator A's randomised validation
 201000-201599 (never used before) all three believed a red Ø ending a word. So is a
 region with lettering inside, a roundel (:mod:`tail_check.emblem`): all three believed
 generator C's "RD" roundel; and a lens in a lamp's housing
-(:mod:`tail_check.housing`).
+(:mod:`tail_check.housing`), and one of a pair of lamps (:mod:`tail_check.pair`).
 """
 
 from __future__ import annotations
@@ -46,6 +46,7 @@ from .detect import DetectionResult, detect
 from .emblem import EMBLEM, EmblemParams, emblem_reason
 from .housing import HOUSING, HousingParams, housing_reason
 from .lettering import LETTERING, LetteringParams, lettering_reason
+from .pair import PAIR, PairParams, pair_reason
 from .pipeline import PIPELINE_PROFILE, Candidate, TreeModel, load_model
 from .pipeline.candidates import iter_candidates
 from .pipeline.proposals import make_maps
@@ -76,6 +77,8 @@ class ConfirmParams:
         then held ``uncertain`` before any verifier runs).
     emblem : what counts as lettering inside the region (a roundel's; held likewise).
     housing : what counts as a lamp's housing around the region (held likewise).
+    pair : what counts as the region's twin light at its height (a pair of lamps; held
+        likewise).
     enabled : False returns every result unchanged (for the comparison in
         ``bench.tail_accuracy``, never in the service).
     """
@@ -85,6 +88,7 @@ class ConfirmParams:
     lettering: LetteringParams = LETTERING
     emblem: EmblemParams = EMBLEM
     housing: HousingParams = HOUSING
+    pair: PairParams = PAIR
     enabled: bool = True
 
 
@@ -161,8 +165,8 @@ def hold_lookalikes(
     """``result`` unchanged, or its ``present`` held ``uncertain`` when the region stands in
     a row of letters of its paint (:func:`~.lettering.lettering_reason`) or carries
     lettering inside, as a roundel does (:func:`~.emblem.emblem_reason`), or sits in a
-    lamp's housing (:func:`~.housing.housing_reason`); ``image_bgr`` at any scale, as in
-    :func:`confirm`."""
+    lamp's housing (:func:`~.housing.housing_reason`), or has a twin light at its height
+    (:func:`~.pair.pair_reason`); ``image_bgr`` at any scale, as in :func:`confirm`."""
     if not _checked(result, params):
         return result
     x0, y0, x1, y1 = _grown(result, image_bgr.shape[1] / max(1, result.image_size[0]), 0.0)
@@ -171,6 +175,7 @@ def hold_lookalikes(
         lettering_reason(image_bgr, box, params=params.lettering)
         or emblem_reason(image_bgr, box, params=params.emblem)
         or housing_reason(image_bgr, box, params=params.housing)
+        or pair_reason(image_bgr, box, params=params.pair)
     )
     if reason is None:
         return result

@@ -195,19 +195,12 @@ KNOWN_SERVICE_FALSE_PRESENTS = [
     # it 1.00 and every verifier believes it (AB 0.77, A 0.67, B 0.96 above 0.65, 0.57,
     # 0.50); the emblem check (lettering inside the region) holds it since stop 34.
     pytest.param("C", "heldout", 70239, "red_logo", id="C:370239"),
-    _known(
-        "A",
-        "validation",
-        1429,
-        "tail_lamp",
-        "known false present of the service on generator A's randomised validation seed"
-        " 201429 (1 of 706 scenes without a disc on 201000-202399, found while measuring the"
-        " lettering check): an unlit round tail lamp in a dark bezel just above the buffer beam"
-        " at night, 34 px across in a 1280x720 scene. Hand-tuned score 1.00; every verifier"
-        " barely above its threshold. Its inside is as bright as the scene (peak/median value"
-        " 1.4), like discs at dusk without a shining reflector, so no brightness rule separates"
-        " it; issue 11 stays open on it",
-    ),
+    # Generator A's randomised validation seed 201429 (1 of 706 scenes without a disc on
+    # 201000-202399, found while measuring the lettering check): an unlit round tail lamp
+    # just above the buffer beam at night, 34 px across in a 1280x720 scene, hand-tuned
+    # score 1.00 and every verifier barely above its threshold; no brightness rule told it
+    # from a disc at dusk. Its twin at the car's other corner does: the pair check holds it.
+    pytest.param("A", "validation", 1429, "tail_lamp", id="A:201429"),
     _known(
         "A",
         "heldout_wide",
