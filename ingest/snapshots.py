@@ -108,6 +108,10 @@ def check_image(data: bytes, *, max_bytes: int, max_pixels: int) -> CheckedImage
         raise _damaged(str(exc)) from None
     if kind[0] == "image/jpeg":
         _check_jpeg_data(data)
+    elif _PNG_END not in data[-4096:]:
+        # PIL decodes a PNG cut after its last pixel data; libpng, which the tail check
+        # decodes with, refuses it, so it was stored and then never judged.
+        raise _damaged("the PNG has no end chunk")
     if min(width, height) < MIN_SIDE:
         raise Unprocessable(
             f"the image is {width}×{height} pixels; a snapshot must be at least"
@@ -137,6 +141,9 @@ def _damaged(why: str) -> Unprocessable:
         errors=_field_error("damaged or truncated image"),
     )
 
+
+# A PNG ends with its IEND chunk: the type and the chunk's fixed CRC.
+_PNG_END = b"IEND\xaeB`\x82"
 
 # The one warning of libjpeg that loses nothing: padding after the last scan, before the end.
 _PADDING = "extraneous bytes before marker 0xd9"
