@@ -22,6 +22,7 @@ __all__ = [
     "LetteringParams",
     "Window",
     "chroma2",
+    "lab_distance",
     "marks_of",
     "window_of",
 ]
@@ -161,6 +162,16 @@ def _paint_of(region: NDArray[np.float32], share: float) -> NDArray[np.float32]:
     colour2 = chroma2(pixels)
     keep = colour2 >= np.quantile(colour2, 1.0 - share)
     return np.asarray(np.median(pixels[keep], axis=0), np.float32)
+
+
+def lab_distance(
+    colours: NDArray[np.float32], to: NDArray[np.float32], lightness_weight: float
+) -> NDArray[np.float32]:
+    """CIELAB distance (OpenCV's 8-bit scale, lightness weighted by ``lightness_weight``)
+    of colours (..., 3) to one colour (3,): the housing's ring and the pair's twin are
+    measured against the region's field with it."""
+    diff = (colours - to) * np.array([lightness_weight, 1.0, 1.0], np.float32)
+    return np.asarray(np.sqrt(np.einsum("...k,...k->...", diff, diff)), np.float32)
 
 
 def _distance2(

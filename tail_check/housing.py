@@ -40,7 +40,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from ._lettering_ink import BBox
+from ._lettering_ink import BBox, lab_distance
 from ._rays import sample_rays
 from .pixels import channel_extreme, percentile_u8
 
@@ -178,8 +178,7 @@ def _sample(
 def _distance(
     colours: NDArray[np.float32], to: NDArray[np.float32], p: HousingParams
 ) -> NDArray[np.float32]:
-    diff = (colours - to) * np.array([p.lightness_weight, 1.0, 1.0], np.float32)
-    return np.asarray(np.sqrt(np.einsum("...k,...k->...", diff, diff)), np.float32)
+    return lab_distance(colours, to, p.lightness_weight)
 
 
 def _rays(

@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from ._lettering_ink import BBox
+from ._lettering_ink import BBox, lab_distance
 from .pixels import clip_window
 
 __all__ = ["PAIR", "PairParams", "pair_reason", "twin_lights"]
@@ -204,8 +204,7 @@ def _twin_at(
     outline, _ = cv2.findContours(own.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     if max(cv2.contourArea(c) for c in outline) < p.min_fill * bw * bh:
         return None
-    weight = np.array([p.lightness_weight, 1.0, 1.0], np.float32)
-    if float(np.linalg.norm((_lab_median(lab, own) - field) * weight)) > p.colour_distance:
+    if float(lab_distance(_lab_median(lab, own), field, p.lightness_weight)) > p.colour_distance:
         return None
     return apart
 

@@ -259,56 +259,6 @@ def test_damaged_snapshots_give_depot_s_messages_only(
     ], done.stdout
 
 
-@pytest.mark.parametrize(
-    ("fmt", "said"), [("BMP", "BMP"), ("GIF", "GIF"), ("WEBP", "WEBP"), ("TIFF", "TIFF")]
-)
-def test_tail_check_refuses_what_the_service_refuses(
-    scene: NDArray[np.uint8],
-    tmp_path: Path,
-    capsys: pytest.CaptureFixture[str],
-    fmt: str,
-    said: str,
-) -> None:
-    """The CLI judged BMP, GIF, WebP and TIFF files (``present`` on a disc) that the service
-    refuses with 422: the CLI says what the service would (an independent trial)."""
-    path = tmp_path / "tail.jpg"
-    Image.fromarray(cv2.cvtColor(scene, cv2.COLOR_BGR2RGB)).save(path, format=fmt)
-    assert _run(["tail-check", str(path), "--json"]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith(f"depot: cannot read image {str(path)!r} (the file is {said}"), err
-
-
-def test_tail_check_refuses_a_jpeg_cut_short_and_given_its_end_back(
-    scene: NDArray[np.uint8], tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """Cut at 80 % and given its end marker, the JPEG decoded with its lower part grey and
-    was judged ``present`` by the CLI and the service alike (an independent trial)."""
-    data = _jpeg(scene)
-    path = tmp_path / "cut.jpg"
-    path.write_bytes(data[: int(len(data) * 0.8)] + b"\xff\xd9")
-    assert _run(["tail-check", str(path), "--json"]) == 2
-    err = capsys.readouterr().err
-    assert "the image is damaged or truncated (Corrupt JPEG data" in err, err
-
-
-@pytest.mark.parametrize("name", ["sparse", "endless"])
-def test_tail_check_never_reads_more_than_the_service_takes(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str
-) -> None:
-    """A 3 GB file raised an OpenCV traceback and ``/dev/zero`` was read until memory ran
-    out: the CLI reads at most the service's byte limit and names it."""
-    if name == "sparse":
-        path = str(tmp_path / "big.jpg")
-        with open(path, "wb") as handle:
-            handle.truncate(3 * 1024**3)
-    else:
-        path = "/dev/zero"
-    assert _run(["tail-check", path, "--json"]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith(f"depot: image {path!r} has more than 10485760 bytes"), err
-    assert "DEPOT_MAX_IMAGE_BYTES" in err
-
-
 # --- 3. profiles: numbers must be JSON numbers, the file UTF-8 ---
 
 

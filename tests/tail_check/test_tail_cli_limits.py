@@ -1,7 +1,9 @@
 """The tail-check CLI refuses an image whose header declares more pixels than the service
 accepts, before decoding it: a PNG of a few hundred bytes can declare 30000x30000 pixels,
 and the decoder then allocates 2.7 GB for it (the service refuses the same file with 413,
-``DEPOT_MAX_IMAGE_PIXELS``, from the header alone)."""
+``DEPOT_MAX_IMAGE_PIXELS``, from the header alone). It reads no more bytes than the service
+takes and refuses what the service refuses (formats, a JPEG cut short), through the
+service's own check (an independent hostile-input trial)."""
 
 from __future__ import annotations
 
@@ -9,11 +11,22 @@ import struct
 import zlib
 from pathlib import Path
 
+import cv2
+import numpy as np
 import pytest
+from numpy.typing import NDArray
+from PIL import Image
 
 import service.commands._image_files as image_files
 import service.commands.tail_check as commands
-from tests.tail_check.tailkit import run_tail_command
+from tests.tail_check.tailkit import plain_disc_scene, run_tail_command
+
+_run = run_tail_command
+
+
+@pytest.fixture(scope="module")
+def scene() -> NDArray[np.uint8]:
+    return plain_disc_scene()[0]
 
 
 def _png_declaring(width: int, height: int) -> bytes:
@@ -61,3 +74,55 @@ def test_the_limit_is_the_services_setting(
         assert "40×30 pixels" in capsys.readouterr().err
     finally:
         get_settings.cache_clear()
+
+
+@pytest.mark.parametrize(
+    ("fmt", "said"), [("BMP", "BMP"), ("GIF", "GIF"), ("WEBP", "WEBP"), ("TIFF", "TIFF")]
+)
+def test_tail_check_refuses_what_the_service_refuses(
+    scene: NDArray[np.uint8],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    fmt: str,
+    said: str,
+) -> None:
+    """The CLI judged BMP, GIF, WebP and TIFF files (``present`` on a disc) that the service
+    refuses with 422: the CLI says what the service would (an independent trial)."""
+    path = tmp_path / "tail.jpg"
+    Image.fromarray(cv2.cvtColor(scene, cv2.COLOR_BGR2RGB)).save(path, format=fmt)
+    assert _run(["tail-check", str(path), "--json"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"depot: cannot read image {str(path)!r} (the file is {said}"), err
+
+
+def test_tail_check_refuses_a_jpeg_cut_short_and_given_its_end_back(
+    scene: NDArray[np.uint8], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Cut at 80 % and given its end marker, the JPEG decoded with its lower part grey and
+    was judged ``present`` by the CLI and the service alike (an independent trial)."""
+    ok, encoded = cv2.imencode(".jpg", scene, [cv2.IMWRITE_JPEG_QUALITY, 92])
+    assert ok
+    data = encoded.tobytes()
+    path = tmp_path / "cut.jpg"
+    path.write_bytes(data[: int(len(data) * 0.8)] + b"\xff\xd9")
+    assert _run(["tail-check", str(path), "--json"]) == 2
+    err = capsys.readouterr().err
+    assert "the image is damaged or truncated (Corrupt JPEG data" in err, err
+
+
+@pytest.mark.parametrize("name", ["sparse", "endless"])
+def test_tail_check_never_reads_more_than_the_service_takes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str
+) -> None:
+    """A 3 GB file raised an OpenCV traceback and ``/dev/zero`` was read until memory ran
+    out: the CLI reads at most the service's byte limit and names it."""
+    if name == "sparse":
+        path = str(tmp_path / "big.jpg")
+        with open(path, "wb") as handle:
+            handle.truncate(3 * 1024**3)
+    else:
+        path = "/dev/zero"
+    assert _run(["tail-check", path, "--json"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"depot: image {path!r} has more than 10485760 bytes"), err
+    assert "DEPOT_MAX_IMAGE_BYTES" in err
