@@ -42,6 +42,12 @@ class NotFound(DepotError):
     status, title = 404, "Not found"
 
 
+class RequestTimeout(DepotError):
+    # The connection cannot carry another request: its body was never read to the end.
+    status, title = 408, "Request timeout"
+    headers = {"Connection": "close"}
+
+
 class Conflict(DepotError):
     status, title = 409, "Conflict"
 

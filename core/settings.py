@@ -38,6 +38,11 @@ class Settings(BaseSettings):
     max_image_bytes: int = Field(default=10 * 1024 * 1024, gt=0)
     max_image_pixels: int = Field(default=40_000_000, gt=0)
     max_body_bytes: int = Field(default=8 * 1024 * 1024, gt=0)
+    # A request's whole body must arrive within this many seconds of the request's start
+    # (408 otherwise): uvicorn waits for a body for ever, so a client that trickles one
+    # (slowloris) or a device whose link died mid-upload held a worker's request open.
+    # 120 s carries a 10 MB photo at 0.7 Mbit/s; raise it for slower station links.
+    body_timeout_s: float = Field(default=120.0, gt=0)
     max_batch: int = Field(default=1000, gt=0, le=1000)
     forecast_every: float | None = Field(
         default=None, gt=0, description="seconds between scheduled forecasts"

@@ -16,6 +16,7 @@ from ingest.event_log import router as event_log_router
 from ingest.router import router as ingest_router
 from ingest.schemas import EVENT_ADAPTER, TailSnapshot
 from service import features
+from service.body_deadline import BodyDeadline
 from service.clearance.router import router as clearance_router
 from service.docs import install_docs
 from service.fleet.review import router as fleet_review_router
@@ -78,6 +79,7 @@ PROBLEMS = {
     "401": "missing or unknown credentials",
     "403": "the role or device kind may not do this",
     "404": "not found",
+    "408": "the request body did not arrive within DEPOT_BODY_TIMEOUT_S",
     "409": "conflict with the stored state",
     "413": "too large",
     "415": "unsupported media type",
@@ -151,6 +153,7 @@ def create_app() -> FastAPI:
     if settings.trusted_proxy_list:
         # The one place proxy headers are read (`depot serve` turns uvicorn's own off).
         app.add_middleware(ProxyHeadersMiddleware, trusted_hosts=settings.trusted_proxy_list)
+    app.add_middleware(BodyDeadline, seconds=settings.body_timeout_s)
     install_error_handlers(app)
     app.include_router(health_router)
     app.include_router(metrics_router)
