@@ -240,6 +240,9 @@ async def post_snapshot(
     device = principal.device
     assert device is not None
     event = await run_in_threadpool(service.validate_snapshot, session, device, payload)
+    known = await run_in_threadpool(service.answer_if_stored, session, device, event, payload)
+    if known is not None:  # a retry, answered without writing its image again
+        return JSONResponse(known[1], status_code=known[0])
     # The file goes to disk before the event: a stored event never points at a missing image.
     await run_in_threadpool(store_image, settings.image_dir, checked, data)
     if session.in_transaction():

@@ -31,11 +31,18 @@ from ingest.checks import (
 )
 from ingest.group import store_group
 from ingest.rows import canonical_sha256
-from ingest.store import accept_event, run_derivation, store_event, store_validated
+from ingest.store import (
+    accept_event,
+    answer_if_stored,
+    run_derivation,
+    store_event,
+    store_validated,
+)
 
 __all__ = [
     "accept_batch",
     "accept_event",
+    "answer_if_stored",
     "canonical_sha256",
     "check_clock",
     "check_device_may_send",

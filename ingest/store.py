@@ -34,6 +34,7 @@ from ingest.rows import (
     insert_one,
     raw_values,
     stored,
+    stored_many,
     write_answers,
 )
 from ingest.schemas import section_of
@@ -68,6 +69,18 @@ def answer_stored(
             f"event_id {event.event_id!r} was already used by {device.id} for a different event"
         )
     return 200, {**result, "status": "duplicate"}
+
+
+def answer_if_stored(
+    session: Session, device: Device, event: Any, body: dict[str, Any]
+) -> tuple[int, dict[str, Any]] | None:
+    """The answer to an event whose ``event_id`` the device has used before (200 and the
+    original answer for a retry; :class:`Conflict` raised for another event), or None for a
+    new one. A snapshot asks before its image is written: a refused upload left a file that
+    no event points at (two uploads racing with one id still may; the second is refused)."""
+    key = (device.id, event.event_id)
+    found = stored_many(session, [key]).get(key)
+    return None if found is None else answer_stored(device, event, body, found)
 
 
 def derive_new(

@@ -106,10 +106,17 @@ def test_jpeg_and_png_accepted_and_served(
     assert list(data_dir.glob(f"images/*/*{ext}")), "image stored content-addressed"
 
 
-def test_same_event_id_other_image_conflicts(client: TestClient) -> None:
+def test_same_event_id_other_image_conflicts_and_leaves_no_image(
+    client: TestClient, data_dir: Path
+) -> None:
     keys = build_line(client)
     assert upload(client, keys["B-cam"], encoded(".jpg")).status_code == 201
-    assert upload(client, keys["B-cam"], encoded(".jpg", width=330)).status_code == 409
+    before = set(data_dir.glob("images/*/*"))
+    refused = upload(client, keys["B-cam"], encoded(".jpg", width=330))
+    assert refused.status_code == 409
+    assert refused.headers["content-type"].startswith("application/problem+json")
+    # The refused image was not written: no file that no event points at.
+    assert set(data_dir.glob("images/*/*")) == before
 
 
 @pytest.mark.parametrize(
