@@ -15,7 +15,8 @@ Public API::
     compare(departure_bgr, arrival_bgr, profile=None) -> Comparison
     compare_with_departure(departure_result, departure_bgr, arrival_bgr, profile=None)
     calibrate(image_bgr, (x, y)) -> CameraProfile
-    render_overlay(image_bgr, result, profile=None) -> BGR array; overlay_png(...) -> bytes
+    render_overlay(image_bgr, result, profile=None) -> BGR array; overlay_png(...) -> bytes;
+    recorded_result(stored verdict dict) -> the DetectionResult to draw
     decode_snapshot(data) -> BGR array (EXIF orientation ignored)
     detect_snapshot(jpeg_bytes, profile=None) -> DetectionResult (JPEG decoded at reduced size)
     CameraProfile, DEFAULT_PROFILE, load_profile
@@ -28,7 +29,7 @@ from .calibrate import calibrate
 from .compare import Comparison, compare, compare_with_departure
 from .confirm import ConfirmParams, confirm, detect_confirmed
 from .detect import MIN_SIDE, WORK_SIDE, DetectionResult, Verdict, detect
-from .overlay import overlay_png, render_overlay
+from .overlay import overlay_png, recorded_result, render_overlay
 from .profile import DEFAULT_PROFILE, CameraProfile, load_profile
 from .regions import DiscCandidate
 from .snapshot import UndecodableImage, decode_snapshot, detect_snapshot
@@ -54,5 +55,6 @@ __all__ = [
     "detect_snapshot",
     "load_profile",
     "overlay_png",
+    "recorded_result",
     "render_overlay",
 ]

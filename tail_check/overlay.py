@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any, cast
+
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from .detect import DetectionResult, check_image, region_box
+from .detect import BBox, DetectionResult, Verdict, check_image, region_box
 from .profile import CameraProfile
 
-__all__ = ["overlay_caption", "overlay_png", "render_overlay"]
+__all__ = ["overlay_caption", "overlay_png", "recorded_result", "render_overlay"]
 
 # BGR colours: green = present, amber = uncertain, red = absent.
 _VERDICT_COLOUR = {"present": (60, 200, 60), "uncertain": (0, 190, 255), "absent": (40, 40, 230)}
@@ -84,6 +87,35 @@ def render_overlay(
         out, text, (6, th + 5), cv2.FONT_HERSHEY_SIMPLEX, font_scale, colour, thick, cv2.LINE_AA
     )
     return out
+
+
+def recorded_result(record: Mapping[str, Any]) -> DetectionResult:
+    """A stored verdict (:meth:`DetectionResult.to_dict`, or a two-camera comparison's,
+    whose boxes are its arrival image's) as a result to draw.
+
+    The overlay must show what was decided: detecting again drew the hand-tuned detector's
+    own answer, a green ``PRESENT`` on a snapshot the learned verifier had held
+    ``uncertain``. The candidates are not stored, so none are drawn.
+
+    Raises
+    ------
+    KeyError
+        When ``record`` lacks the verdict, score, search region or image size.
+    """
+    geometry: Mapping[str, Any] = record.get("arrival") or record
+    box = geometry.get("bbox")
+    return DetectionResult(
+        verdict=cast(Verdict, record["verdict"]),
+        score=float(record["score"]),
+        bbox=cast(BBox, tuple(int(v) for v in box)) if box else None,
+        pixel_fraction=float(geometry.get("pixel_fraction", 0.0)),
+        disc_score=float(geometry.get("disc_score", 0.0)),
+        quality=float(geometry.get("quality", 1.0)),
+        search_region=cast(BBox, tuple(int(v) for v in geometry["search_region"])),
+        image_size=cast(tuple[int, int], tuple(int(v) for v in geometry["image_size"])),
+        candidates=(),
+        reasons=tuple(str(r) for r in record.get("reasons", ())),
+    )
 
 
 def overlay_caption(result: DetectionResult) -> str:

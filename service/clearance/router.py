@@ -185,10 +185,15 @@ def get_snapshot_meta(
     responses={200: {"content": {"image/png": {}}}},
 )
 def get_snapshot_overlay(snapshot_id: SnapshotId, session: DbSession, _: CurrentReader) -> Response:
+    """The snapshot with its stored verdict drawn on it (the one the section's decision
+    used); one that was never judged (its derivation failed) is judged now."""
     snapshot = _snapshot(session, snapshot_id)
     image = load_bgr(snapshot_file(snapshot))
-    profile = camera_profile(snapshot.device_id)
-    png = tail_check.overlay_png(image, tail_check.detect(image, profile), profile)
+    if snapshot.detection:
+        png = tail_check.overlay_png(image, tail_check.recorded_result(snapshot.detection))
+    else:
+        profile = camera_profile(snapshot.device_id)
+        png = tail_check.overlay_png(image, tail_check.detect_confirmed(image, profile), profile)
     return Response(
         png, media_type="image/png", headers={"Cache-Control": "private, max-age=86400"}
     )
