@@ -86,18 +86,21 @@ def _head(path: str, key: dict[str, str], content_type: str, length: int) -> str
     )
 
 
-def _event_body(event_id: str) -> bytes:
-    body: dict[str, Any] = event(event_id, "axle_count", section="AB", axles=212)
-    return json.dumps(body).encode()
+def _axle_count(
+    keys: dict[str, dict[str, str]], event_id: str
+) -> tuple[dict[str, str], bytes, str]:
+    """The axle counter's key, an event's body and the headers that announce it."""
+    key = keys["B-ac"]
+    fields: dict[str, Any] = event(event_id, "axle_count", section="AB", axles=212)
+    body = json.dumps(fields).encode()
+    return key, body, _head("/api/v1/events", key, "application/json", len(body))
 
 
 def test_an_event_body_that_stops_coming_is_refused_408_and_not_stored(
     server: tuple[str, dict[str, dict[str, str]]],
 ) -> None:
     url, keys = server
-    key = keys["B-ac"]
-    body = _event_body("slow-1")
-    head = _head("/api/v1/events", key, "application/json", len(body))
+    key, body, head = _axle_count(keys, "slow-1")
     status, answer, elapsed = _send(url, head, [(0.0, body[:10])])
     assert status == 408, answer
     problem = json.loads(answer)
@@ -114,9 +117,7 @@ def test_a_trickled_body_is_cut_off_at_the_deadline_not_per_byte(
 ) -> None:
     """A byte every half second never lets a per-read timeout fire; the deadline does."""
     url, keys = server
-    key = keys["B-ac"]
-    body = _event_body("slow-2")
-    head = _head("/api/v1/events", key, "application/json", len(body))
+    _, body, head = _axle_count(keys, "slow-2")
     status, _, elapsed = _send(url, head, [(0.5, body[i : i + 1]) for i in range(12)])
     assert status == 408
     assert elapsed <= DEADLINE_S + 5
@@ -143,9 +144,7 @@ def test_a_body_sent_in_parts_within_the_deadline_is_accepted(
     server: tuple[str, dict[str, dict[str, str]]],
 ) -> None:
     url, keys = server
-    key = keys["B-ac"]
-    body = _event_body("parts-1")
-    head = _head("/api/v1/events", key, "application/json", len(body))
+    _, body, head = _axle_count(keys, "parts-1")
     half = len(body) // 2
     status, answer, _ = _send(url, head, [(0.0, body[:half]), (0.5, body[half:])])
     assert status == 201, answer
