@@ -43,6 +43,10 @@ class Settings(BaseSettings):
     # (slowloris) or a device whose link died mid-upload held a worker's request open.
     # 120 s carries a 10 MB photo at 0.7 Mbit/s; raise it for slower station links.
     body_timeout_s: float = Field(default=120.0, gt=0)
+    # A connection must complete a request's headers within this many seconds of opening
+    # or of its previous answer, else it is closed (service/header_deadline.py): uvicorn
+    # held a connection that never finished its headers for ever.
+    header_timeout_s: float = Field(default=20.0, gt=0)
     max_batch: int = Field(default=1000, gt=0, le=1000)
     forecast_every: float | None = Field(
         default=None, gt=0, description="seconds between scheduled forecasts"

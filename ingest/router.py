@@ -89,10 +89,15 @@ async def _read_limited(request: Request, limit: int) -> bytes:
                 raise PayloadTooLarge(f"the body exceeds the limit of {limit} bytes")
             chunks.append(chunk)
     except ClientDisconnect:
-        # Nothing was stored; the device sends the event again. A refusal rather than the
-        # ASGI traceback the server logged for every such request (an independent trial).
-        raise DepotError("the client closed the connection before its body arrived") from None
+        raise _gone() from None
     return b"".join(chunks)
+
+
+def _gone() -> DepotError:
+    # Nothing was stored; the device sends the event again. A refusal rather than the ASGI
+    # traceback the server logged for every such request, events and snapshots alike (two
+    # independent trials).
+    return DepotError("the client closed the connection before its body arrived")
 
 
 def _committed(store: Callable[..., T], session: Session, *args: Any) -> T:
@@ -209,16 +214,19 @@ async def post_snapshot(
         raise PayloadTooLarge(
             f"the upload has {declared} bytes; the image limit is {settings.max_image_bytes}"
         )
-    async with bounded(request, limit).form(max_files=1, max_fields=10) as form:
-        check_form_fields(name for name, _ in form.multi_items())
-        upload = form.get("image")
-        if not isinstance(upload, UploadFile):
-            raise Unprocessable(
-                "the 'image' file is missing",
-                errors=[{"loc": ["body", "image"], "msg": "field required"}],
-            )
-        data = await upload.read(settings.max_image_bytes + 1)
-        fields = {k: form.get(k) for k in ("event_id", "occurred_at", "section")}
+    try:
+        async with bounded(request, limit).form(max_files=1, max_fields=10) as form:
+            check_form_fields(name for name, _ in form.multi_items())
+            upload = form.get("image")
+            if not isinstance(upload, UploadFile):
+                raise Unprocessable(
+                    "the 'image' file is missing",
+                    errors=[{"loc": ["body", "image"], "msg": "field required"}],
+                )
+            data = await upload.read(settings.max_image_bytes + 1)
+            fields = {k: form.get(k) for k in ("event_id", "occurred_at", "section")}
+    except ClientDisconnect:
+        raise _gone() from None
     missing = [k for k, v in fields.items() if not isinstance(v, str) or not v]
     if missing:
         raise Unprocessable(

@@ -87,6 +87,8 @@ def _usable_database() -> None:
 def _serve(args: argparse.Namespace) -> int:
     import uvicorn
 
+    from service.header_deadline import HeaderDeadlineProtocol
+
     _usable_database()
     settings = get_settings()
     if args.migrate:
@@ -104,6 +106,8 @@ def _serve(args: argparse.Namespace) -> int:
         # uvicorn kills a worker that answers no health ping for this long; its default (5 s)
         # is shorter than a worker's start on a busy 2-core host, which then never comes up.
         timeout_worker_healthcheck=60,
+        # Connections that never finish their headers are closed (DEPOT_HEADER_TIMEOUT_S).
+        http=HeaderDeadlineProtocol,
     )
     return 0
 

@@ -49,10 +49,17 @@ def live_server(data_dir: Path) -> Iterator[str]:
     _reset_caches()
     upgrade(os.environ["DEPOT_DATABASE_URL"])
     from service.app import create_app
+    from service.header_deadline import HeaderDeadlineProtocol
 
     port = _free_port()
     server = uvicorn.Server(
-        uvicorn.Config(create_app(), host="127.0.0.1", port=port, log_level="warning")
+        uvicorn.Config(
+            create_app(),
+            host="127.0.0.1",
+            port=port,
+            log_level="warning",
+            http=HeaderDeadlineProtocol,  # as `depot serve` runs
+        )
     )
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()

@@ -1,14 +1,20 @@
-"""A request body that does not arrive in time is cut off (408), on a real uvicorn server.
+"""A request body that does not arrive in time is cut off (408), and a connection that does
+not finish its headers is closed, on a real uvicorn server run as ``depot serve`` runs it.
 
 A client that sends its headers and then its body a byte at a time (slowloris), or a
 device whose link dies mid-upload, held a worker's request open for ever: uvicorn has no
 body timeout. ``DEPOT_BODY_TIMEOUT_S`` bounds the whole body from the request's start.
+Connections that never finished their headers were held for ever too, until an
+independent trial's 20,000 of them left the server unable to accept anyone;
+``DEPOT_HEADER_TIMEOUT_S`` closes them.
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import socket
+import struct
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -24,6 +30,9 @@ from tests.service.livekit import live_client, live_server
 DEADLINE_S = 3.0
 """The body deadline of these tests' server: long enough for a loaded CI machine to pass
 a body sent in two parts, short enough that the slow ones end soon."""
+HEADERS_S = 2.0
+"""The header deadline of these tests' server: shorter than the body's, so a slow body
+cut at 3 s (408) also shows that a request whose headers arrived is not cut at 2 s."""
 WAIT_S = 15.0
 """How long a test waits for the server's answer (without a deadline it never comes)."""
 
@@ -34,6 +43,7 @@ def server(
 ) -> Iterator[tuple[str, dict[str, dict[str, str]]]]:
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv("DEPOT_BODY_TIMEOUT_S", str(DEADLINE_S))
+        patch.setenv("DEPOT_HEADER_TIMEOUT_S", str(HEADERS_S))
         with live_server(tmp_path_factory.mktemp("deadline")) as url:
             with live_client(url) as client:
                 keys = build_line(cast(TestClient, client))
@@ -150,6 +160,44 @@ def test_a_body_sent_in_parts_within_the_deadline_is_accepted(
     assert status == 201, answer
 
 
+def _closed_after(url: str, sent: bytes, *, answered_first: bytes = b"") -> float:
+    """Seconds until the server closes a connection that sent ``answered_first`` (one whole
+    request, answered) and then ``sent``; socket.timeout when it never does."""
+    where = urlsplit(url)
+    with socket.create_connection((where.hostname, where.port), timeout=WAIT_S) as conn:
+        if answered_first:
+            conn.sendall(answered_first)
+            answer = b""
+            while not _complete(answer):
+                answer += conn.recv(65536)
+            assert answer.startswith(b"HTTP/1.1 200"), answer
+        conn.sendall(sent)
+        started = time.monotonic()
+        while conn.recv(65536):
+            pass
+        return time.monotonic() - started
+
+
+@pytest.mark.parametrize(
+    "sent",
+    [b"", b"POST /api/v1/events HTTP/1.1\r\nHost: depot\r\n", b"GET /heal"],
+    ids=["nothing", "half the headers", "half the request line"],
+)
+def test_a_connection_that_never_finishes_its_headers_is_closed(
+    server: tuple[str, dict[str, dict[str, str]]], sent: bytes
+) -> None:
+    assert HEADERS_S - 0.5 <= _closed_after(server[0], sent) <= HEADERS_S + 5
+
+
+def test_a_kept_alive_connection_that_stalls_in_its_next_headers_is_closed(
+    server: tuple[str, dict[str, dict[str, str]]],
+) -> None:
+    """uvicorn's keep-alive timeout ends at the first byte of the next request."""
+    first = b"GET /healthz HTTP/1.1\r\nHost: depot\r\n\r\n"
+    elapsed = _closed_after(server[0], b"GET /healthz HTTP/1.1\r\nHo", answered_first=first)
+    assert elapsed <= HEADERS_S + 5
+
+
 def _json() -> dict[str, str]:
     return {"Content-Type": "application/json"}
 
@@ -165,3 +213,24 @@ def test_the_deadline_is_a_documented_setting_with_a_bound() -> None:
         Settings(body_timeout_s=0)
     readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
     assert "DEPOT_BODY_TIMEOUT_S" in readme
+
+
+def test_a_snapshot_upload_whose_client_goes_away_logs_no_traceback(
+    server: tuple[str, dict[str, dict[str, str]]], caplog: pytest.LogCaptureFixture
+) -> None:
+    """A camera on a flaky link that drops mid-upload (a reset): nothing stored, and no
+    ERROR traceback ("Exception in ASGI application") for each one, as for events."""
+    url, keys = server
+    head = _head("/api/v1/snapshots", keys["B-cam"], "multipart/form-data; boundary=b0", 500_000)
+    part = b'--b0\r\nContent-Disposition: form-data; name="image"; filename="t.jpg"\r\n\r\n'
+    where = urlsplit(url)
+    with caplog.at_level(logging.ERROR):
+        for _ in range(3):
+            conn = socket.create_connection((where.hostname, where.port), timeout=WAIT_S)
+            conn.sendall(head.encode("latin-1") + part + b"\xff\xd8" + b"\0" * 200_000)
+            time.sleep(0.2)
+            conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+            conn.close()  # a reset, not an orderly close
+        time.sleep(1.0)  # the server notices the reset
+    tracebacks = [r for r in caplog.records if r.levelno >= logging.ERROR]
+    assert not tracebacks, [r.getMessage() for r in tracebacks]

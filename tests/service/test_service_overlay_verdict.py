@@ -29,6 +29,7 @@ VERDICT_BGR = {"present": (60, 200, 60), "uncertain": (0, 190, 255), "absent": (
 def banner_verdict(png: bytes) -> str:
     """The verdict whose colour the overlay's banner text is drawn in (most pixels near it)."""
     image = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_COLOR)
+    assert image is not None, "the overlay is a PNG"
     banner = image[: max(12, image.shape[0] // 12)].astype(np.int32)
     near = {
         verdict: int((np.abs(banner - np.array(bgr)).sum(axis=2) < 60).sum())
