@@ -16,7 +16,7 @@ from starlette.requests import ClientDisconnect
 from starlette.types import Message
 
 from core import metrics
-from core.auth import CurrentDevicePrincipal
+from core.auth import CurrentDevicePrincipal, Principal
 from core.database import DbSession
 from core.errors import (
     DepotError,
@@ -205,15 +205,21 @@ async def post_snapshot(
     request: Request, session: DbSession, principal: CurrentDevicePrincipal
 ) -> JSONResponse:
     """Multipart upload of a tail-car image with ``event_id``, ``occurred_at`` and ``section``."""
-    settings = get_settings()
-    if not request.headers.get("content-type", "").startswith("multipart/form-data"):
-        raise UnsupportedMediaType("send snapshots as multipart/form-data with an 'image' file")
-    declared = request.headers.get("content-length", "")
-    limit = settings.max_image_bytes + 64 * 1024  # the image and its form fields
-    if declared.isdigit() and int(declared) > limit:
-        raise PayloadTooLarge(
-            f"the upload has {declared} bytes; the image limit is {settings.max_image_bytes}"
-        )
+    started = time.perf_counter()
+    kind = {"kind": "tail_snapshot"}  # counted like every device event, refusals too
+    try:
+        status, result = await _snapshot(request, session, principal)
+    except DepotError as exc:
+        metrics.event_answered(kind, exc.status, started)
+        raise
+    metrics.event_answered(kind, status, started)
+    return JSONResponse(result, status_code=status)
+
+
+async def _snapshot_form(
+    request: Request, limit: int, max_image_bytes: int
+) -> tuple[bytes, dict[str, Any]]:
+    """The image's bytes (at most one past its limit) and the event's form fields."""
     try:
         async with bounded(request, limit).form(max_files=1, max_fields=10) as form:
             check_form_fields(name for name, _ in form.multi_items())
@@ -223,10 +229,25 @@ async def post_snapshot(
                     "the 'image' file is missing",
                     errors=[{"loc": ["body", "image"], "msg": "field required"}],
                 )
-            data = await upload.read(settings.max_image_bytes + 1)
-            fields = {k: form.get(k) for k in ("event_id", "occurred_at", "section")}
+            data = await upload.read(max_image_bytes + 1)
+            return data, {k: form.get(k) for k in ("event_id", "occurred_at", "section")}
     except ClientDisconnect:
         raise _gone() from None
+
+
+async def _snapshot(
+    request: Request, session: Session, principal: Principal
+) -> tuple[int, dict[str, Any]]:
+    settings = get_settings()
+    if not request.headers.get("content-type", "").startswith("multipart/form-data"):
+        raise UnsupportedMediaType("send snapshots as multipart/form-data with an 'image' file")
+    declared = request.headers.get("content-length", "")
+    limit = settings.max_image_bytes + 64 * 1024  # the image and its form fields
+    if declared.isdigit() and int(declared) > limit:
+        raise PayloadTooLarge(
+            f"the upload has {declared} bytes; the image limit is {settings.max_image_bytes}"
+        )
+    data, fields = await _snapshot_form(request, limit, settings.max_image_bytes)
     missing = [k for k, v in fields.items() if not isinstance(v, str) or not v]
     if missing:
         raise Unprocessable(
@@ -250,7 +271,7 @@ async def post_snapshot(
     event = await run_in_threadpool(service.validate_snapshot, session, device, payload)
     known = await run_in_threadpool(service.answer_if_stored, session, device, event, payload)
     if known is not None:  # a retry, answered without writing its image again
-        return JSONResponse(known[1], status_code=known[0])
+        return known
     # The file goes to disk before the event: a stored event never points at a missing image.
     await run_in_threadpool(store_image, settings.image_dir, checked, data)
     if session.in_transaction():
@@ -258,7 +279,7 @@ async def post_snapshot(
     # Detection runs here, in a thread and outside the transaction: the derivation, which
     # holds the section's lock, then finds the verdict ready instead of computing it.
     await run_in_threadpool(prepare, device, event)
-    status, result = await run_in_threadpool(
+    answer: tuple[int, dict[str, Any]] = await run_in_threadpool(
         _committed, service.store_event, session, device, event, payload
     )
-    return JSONResponse(result, status_code=status)
+    return answer

@@ -14,6 +14,7 @@ from core.database import utcnow
 from core.settings import get_settings
 from tests.conftest import ADMIN
 from tests.service.linekit import DEVICES, build_line, event
+from tests.service.scenario import jpeg
 
 SAMPLE = re.compile(r"^([a-z_]+)(\{[^}]*\})? (\S+)$")
 
@@ -122,3 +123,25 @@ def test_stale_devices_gauge_follows_the_one_liveness_rule(
     monkeypatch.setattr(liveness, "silent", nobody_is_silent)
     assert stale_devices(session, utcnow()) == []
     assert _scrape(client)["depot_devices_stale"] == 0
+
+
+def test_metrics_count_snapshot_uploads_too(client: TestClient) -> None:
+    """A snapshot is a device event like any other (an independent trial: uploads were not
+    counted): accepted, retried and refused ones each count under ``tail_snapshot``."""
+    keys = build_line(client)
+    image = jpeg(disc=True, seed=4)
+    form = {"event_id": "m-s1", "occurred_at": "2026-11-23T10:41:00Z", "section": "AB"}
+    before = _scrape(client)
+    for data, status in ((image, 201), (image, 200), (b"not an image", 422)):
+        event_id = form["event_id"] if status != 422 else "m-s2"
+        files = {"image": ("t.jpg", data, "image/jpeg")}
+        answer = client.post(
+            "/api/v1/snapshots", data={**form, "event_id": event_id}, files=files,
+            headers=keys["B-cam"],
+        )  # fmt: skip
+        assert answer.status_code == status, answer.text
+    after = _scrape(client)
+    series = 'depot_events_total{{kind="tail_snapshot",outcome="{}",status="{}"}}'
+    for outcome, status in (("accepted", 201), ("duplicate", 200), ("refused", 422)):
+        name = series.format(outcome, status)
+        assert after.get(name, 0.0) - before.get(name, 0.0) == 1, name
