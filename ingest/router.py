@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any, TypeVar
 
 from fastapi import APIRouter, Request
@@ -151,13 +151,23 @@ async def post_events(request: Request, session: DbSession, device: EventDevice)
     if events is not None:
         answer = await run_in_threadpool(_batch_answer, session, device, events)
         return Response(answer, status_code=200, media_type="application/json")
+    single = _single(session, device, payload, large=len(body) > INLINE_BYTES)
+    status, result = await _counted(payload, started, single)
+    return JSONResponse(result, status_code=status)
+
+
+async def _counted(
+    payload: Any, started: float, answering: Awaitable[tuple[int, dict[str, Any]]]
+) -> tuple[int, dict[str, Any]]:
+    """``answering``'s answer, counted in the metrics (a refusal by its status, re-raised);
+    ``started`` is when the request came in."""
     try:
-        status, result = await _single(session, device, payload, large=len(body) > INLINE_BYTES)
+        status, result = await answering
     except DepotError as exc:
         metrics.event_answered(payload, exc.status, started)
         raise
     metrics.event_answered(payload, status, started)
-    return JSONResponse(result, status_code=status)
+    return status, result
 
 
 # Bodies up to this size are validated on the event loop (microseconds); larger ones (long
@@ -205,14 +215,9 @@ async def post_snapshot(
     request: Request, session: DbSession, principal: CurrentDevicePrincipal
 ) -> JSONResponse:
     """Multipart upload of a tail-car image with ``event_id``, ``occurred_at`` and ``section``."""
-    started = time.perf_counter()
     kind = {"kind": "tail_snapshot"}  # counted like every device event, refusals too
-    try:
-        status, result = await _snapshot(request, session, principal)
-    except DepotError as exc:
-        metrics.event_answered(kind, exc.status, started)
-        raise
-    metrics.event_answered(kind, status, started)
+    snapshot = _snapshot(request, session, principal)
+    status, result = await _counted(kind, time.perf_counter(), snapshot)
     return JSONResponse(result, status_code=status)
 
 
