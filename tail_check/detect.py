@@ -13,7 +13,7 @@ weak evidence yields ``uncertain`` and poor images lower the confidence of ``abs
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import cv2
@@ -21,12 +21,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .colour import band_mask
-from .lamps import LAMP_CHECK, lamp_reason
+from .passes import search_passes
 from .pixels import channel_extreme, percentile_u8, std_u8, subtract_level, veil_level
 from .profile import DEFAULT_PROFILE, CameraProfile
-from .regions import DiscCandidate, find_candidates
-from .rims import rim_candidates
-from .seeds import Band, in_band, seed_passes
+from .regions import DiscCandidate
 from .shape import ramp
 
 __all__ = [
@@ -42,9 +40,6 @@ __all__ = [
 Verdict = Literal["present", "absent", "uncertain"]
 BBox = tuple[int, int, int, int]
 
-RED_BODY_SHARE = 0.12
-"""Share of the search region in the disc's colour above which a red car body is assumed
-and the disc is also searched by its rim."""
 MIN_RESOLVED_PX = 12
 """A disc fewer image pixels across than this cannot be told from a small hand wheel or
 lamp: the verdict stays ``uncertain`` however disc-like the blurred region looks."""
@@ -237,91 +232,6 @@ def _verdict(
     return "absent", (1.0 - disc) * quality, [reason, *notes]
 
 
-def _without_lamps(
-    found: list[DiscCandidate],
-    work: NDArray[np.uint8],
-    p: CameraProfile,
-    *,
-    origin: tuple[int, int],
-    scale: float,
-) -> list[DiscCandidate]:
-    """Candidates best first, each that would be ``present`` but is a lit lamp (a clipped
-    core fading out in a glow, :mod:`tail_check.lamps`) held just below the threshold."""
-    if not any(c.score >= p.present_threshold and c.glow is None for c in found):
-        return sorted(found, key=lambda c: -c.score)
-    value = channel_extreme(work, cv2.max).astype(np.float32)
-    below = math.nextafter(p.present_threshold, 0.0)
-    out = []
-    for c in found:
-        if c.score >= p.present_threshold and c.glow is None:
-            x, y, w, h = c.bbox
-            # Box centre in working pixels (pixel centres at integer coordinates).
-            centre = ((x - origin[0] + w / 2) * scale - 0.5, (y - origin[1] + h / 2) * scale - 0.5)
-            radius = c.diameter * WORK_SIDE / 2
-            reason = lamp_reason(value, centre, radius, WORK_SIDE, LAMP_CHECK)
-            if reason is not None:
-                c = replace(c, score=min(c.score, below), glow=reason)
-        out.append(c)
-    return sorted(out, key=lambda c: -c.score)
-
-
-def _search(
-    smooth: NDArray[np.uint8],
-    clear: NDArray[np.uint8],
-    band: NDArray[np.bool_],
-    valley_free: NDArray[np.bool_],
-    p: CameraProfile,
-    *,
-    work: NDArray[np.uint8],
-    origin: tuple[int, int],
-    scale: float,
-    sigma_px: float,
-) -> list[DiscCandidate]:
-    """All candidate passes, best first: camera band, wider and pale seed bands, rim
-    search. A lit lamp never settles the search: the real disc may still be found."""
-
-    def seeded(
-        seed_band: NDArray[np.bool_], found: list[DiscCandidate], colour: Band | None = None
-    ) -> list[DiscCandidate]:
-        more = find_candidates(
-            seed_band & valley_free,
-            seed_band,
-            smooth,
-            valley_free,
-            p,
-            origin=origin,
-            scale=scale,
-            work_side=WORK_SIDE,
-        )
-        if colour is not None:  # a seed's blurred edge can lead anywhere: keep its colour
-            more = [c for c in more if in_band(c.mean_rgb, colour)]
-        return _without_lamps(found + more, work, p, origin=origin, scale=scale)
-
-    def settled(found: list[DiscCandidate]) -> bool:
-        return bool(found) and found[0].score >= p.present_threshold
-
-    found = seeded(band, [])
-    wide = band
-    for index, (seed, gate) in enumerate(seed_passes(p)):
-        if settled(found):
-            break
-        seeds = band_mask(smooth, seed[0], seed[1], gain_range=seed[2])
-        wide = seeds if index == 0 else wide
-        found = seeded(seeds, found, gate)
-    red_share = float(np.count_nonzero(band)) / max(1.0, float(band.size))
-    if red_share > RED_BODY_SHARE and not settled(found):
-        sharp_red = np.asarray(
-            cv2.GaussianBlur(clear[..., 2], (0, 0), min(sigma_px, 0.8)), dtype=np.uint8
-        )
-        # The rim is the evidence here (on a red body any circle is in the band), so the
-        # inside only has to be in the wider band: snow and fog veil a disc's colour.
-        found += rim_candidates(
-            wide, smooth, sharp_red, p, origin=origin, scale=scale, work_side=WORK_SIDE
-        )
-        found = _without_lamps(found, work, p, origin=origin, scale=scale)
-    return found
-
-
 def detect(image_bgr: NDArray[np.uint8], profile: CameraProfile | None = None) -> DetectionResult:
     """Detect the red tail disc on a last-car snapshot.
 
@@ -377,7 +287,7 @@ def detect_reduced(
     valley_free = _not_in_valley(clear, sigma_px)
     mask = band & valley_free
     accepted = float(np.count_nonzero(mask))
-    candidates = _search(
+    candidates = search_passes(
         smooth,
         clear,
         band,
@@ -387,6 +297,7 @@ def detect_reduced(
         origin=box[:2],
         scale=scale,
         sigma_px=sigma_px,
+        work_side=WORK_SIDE,
     )
     quality, notes = _quality(smooth, accepted / max(1.0, float(mask.size)))
     best = candidates[0] if candidates else None
