@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import io
 import os
 import tempfile
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -181,12 +183,56 @@ def stored_image(image_dir: Path, sha256: str, content_type: str) -> Path:
     return image_path(image_dir, sha256, SUFFIXES[content_type])
 
 
+@contextmanager
+def image_store_lock(image_dir: Path, *, exclusive: bool) -> Iterator[None]:
+    """Hold ``fcntl.flock`` on the image folder itself: shared while an upload stores its
+    image (uploads never wait for each other), exclusive while ``depot images prune``
+    re-checks and removes one file.
+
+    Why no accepted upload can lose its image. An upload refreshes its file's mtime (or
+    writes it anew) under the shared lock, then commits its event: a few seconds later
+    (detection, one transaction), far within the prune's minimum age of 600 s. The prune
+    fixes its cutoff (now − age) *before* it reads which images the database references,
+    and removes a file only if, under the exclusive lock, its mtime is still before that
+    cutoff. A file so removed was last touched before cutoff, so any upload that touched it
+    committed before the prune began reading, and the prune saw that reference and kept the
+    file; an upload touching it after the removal finds no file and writes it again.
+
+    The folder is locked rather than a lock file in it: the store holds images only, and
+    the backup check (``deploy/restore-test.sh``) counts every file in it as an image.
+    Each call opens its own descriptor, so threads of one process lock as processes do.
+    """
+    image_dir.mkdir(parents=True, exist_ok=True)
+    descriptor = os.open(image_dir, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        fcntl.flock(descriptor, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        yield
+    finally:
+        os.close(descriptor)  # releases the lock
+
+
 def store_image(image_dir: Path, checked: CheckedImage, data: bytes) -> Path:
-    """Write once under its SHA-256; a crash never leaves a half-written file under that name."""
+    """Write once under its SHA-256; a crash never leaves a half-written file under that name.
+
+    An image already there (an orphan of a refused or interrupted upload, perhaps) has its
+    mtime refreshed instead, under the lock: the prune then counts it as recent until this
+    upload's event has committed (:func:`image_store_lock` says why that is enough).
+    """
     path = image_path(image_dir, checked.sha256, checked.suffix)
-    if path.exists():
-        return path
-    path.parent.mkdir(parents=True, exist_ok=True)
+    with image_store_lock(image_dir, exclusive=False):
+        try:
+            os.utime(path)
+            return path
+        except (FileNotFoundError, PermissionError):
+            # Not there (or removed by hand meanwhile), or someone else's file that cannot
+            # be touched: a file of our own replaces it, just as fresh.
+            pass
+        path.parent.mkdir(parents=True, exist_ok=True)
+        _write_new(path, data)
+    return path
+
+
+def _write_new(path: Path, data: bytes) -> None:
     # A name of its own per call: threads storing the same image must not share a temporary file.
     descriptor, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
     try:
@@ -198,7 +244,6 @@ def store_image(image_dir: Path, checked: CheckedImage, data: bytes) -> Path:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-    return path
 
 
 def load_bgr(path: Path) -> NDArray[np.uint8]:
