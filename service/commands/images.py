@@ -29,9 +29,10 @@ from service.commands._common import FINITE, fail
 
 __all__ = ["MIN_OLDER_THAN_S", "register"]
 
-# An upload's image is on disk before its event commits: its body arrives within
-# DEPOT_BODY_TIMEOUT_S (120 s by default), then detection and the commit take seconds. A file
-# younger than this may belong to an upload still on its way; ten minutes is ample margin.
+# An upload's image is on disk before its event commits: the body has arrived in full (the
+# body deadline runs before the write), then detection runs and the commit waits its turn
+# behind the section's lock; that takes seconds. A file younger than this may belong to an
+# upload still on its way; ten minutes is ample margin.
 MIN_OLDER_THAN_S = 600.0
 DEFAULT_OLDER_THAN_S = 3600
 
@@ -179,9 +180,9 @@ def _prune(args: argparse.Namespace) -> int:
     if older_than < MIN_OLDER_THAN_S:
         return fail(
             f"--older-than {older_than:g} is too short; give at least {MIN_OLDER_THAN_S:g}"
-            " seconds: an upload's image is written before its event commits (its body may"
-            " take DEPOT_BODY_TIMEOUT_S to arrive), so a younger unreferenced file may belong"
-            " to an upload still being accepted"
+            " seconds: an upload's image is written before its event commits (detection and"
+            " the commit come after the write), so a younger unreferenced file may belong to"
+            " an upload still being accepted"
         )
     image_dir = get_settings().image_dir
     # Fixed before the references are read, and every removal re-checked against it: the
